@@ -1,0 +1,588 @@
+"""Typed, frozen configuration of every component, nested into one :class:`ExperimentConfig`.
+
+Units are SI throughout (metres, kilograms, seconds, newtons, radians) unless a field name says
+otherwise (``*_mm``, ``*_deg``). Every dataclass validates itself in ``__post_init__`` and raises
+:class:`vgs.errors.ConfigError` naming the offending field, so bad input never reaches the physics.
+
+Named profiles (:data:`PROFILES`): ``smoke`` (seconds, for tests), ``quick`` (minutes on a 2-core
+CPU) and ``paper`` (the paper's budget: 5000 training grasps, 1000 test assemblies).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field, fields, is_dataclass, replace
+from typing import Any
+
+from vgs.errors import ConfigError
+
+
+def _positive(obj: Any, *names: str, prefix: str = "") -> None:
+    for name in names:
+        value = getattr(obj, name)
+        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+            raise ConfigError(f"{prefix}{name}", f"must be a positive number, got {value!r}")
+
+
+def _non_negative(obj: Any, *names: str, prefix: str = "") -> None:
+    for name in names:
+        value = getattr(obj, name)
+        if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
+            raise ConfigError(f"{prefix}{name}", f"must be >= 0, got {value!r}")
+
+
+def _fraction(obj: Any, *names: str, prefix: str = "") -> None:
+    for name in names:
+        value = getattr(obj, name)
+        if not (isinstance(value, (int, float)) and 0.0 <= value <= 1.0):
+            raise ConfigError(f"{prefix}{name}", f"must lie in [0, 1], got {value!r}")
+
+
+# ----------------------------------------------------------------------------------------------
+# Cell
+# ----------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class PegConfig:
+    """The peg: a plain cylinder (paper 4.1: 100 mm long, 30 mm diameter, 0.55 kg, no chamfer).
+
+    Attributes:
+        diameter: Peg diameter [m].
+        length: Peg length [m].
+        mass: Peg mass [kg].
+        friction: Sliding friction coefficient of the peg surface.
+    """
+
+    diameter: float = 0.030
+    length: float = 0.100
+    mass: float = 0.55
+    friction: float = 0.4
+
+    def __post_init__(self) -> None:
+        _positive(self, "diameter", "length", "mass", "friction", prefix="peg.")
+        if self.length < 2 * 0.025:
+            raise ConfigError("peg.length", "must be at least 50 mm so the RG2 pads fit on it")
+
+    @property
+    def radius(self) -> float:
+        return 0.5 * self.diameter
+
+
+@dataclass(frozen=True)
+class HoleConfig:
+    """The hole block (paper 4.1: 1 mm clearance, no chamfer).
+
+    Attributes:
+        clearance: Diametral clearance: hole diameter minus nominal peg diameter [m].
+        depth: Depth of the hole [m]; must exceed the insertion depth K.
+        outer_radius: Outer radius of the block [m].
+        segments: Number of convex wedges that approximate the round hole. With the wedges' inner
+            faces tangent to the hole circle, the inner surface lies between r and
+            r / cos(pi / segments); 32 wedges keep it within 0.08 mm for r = 15.5 mm.
+        nominal_xy: Nominal hole centre on the table, world frame [m].
+        randomize: Displace the hole every episode uniformly inside a disk whose area equals the
+            hole's area (paper 3.2), i.e. within the hole radius of ``nominal_xy``.
+        friction: Sliding friction coefficient of the hole surfaces.
+    """
+
+    clearance: float = 0.001
+    depth: float = 0.045
+    outer_radius: float = 0.060
+    segments: int = 32
+    nominal_xy: tuple[float, float] = (0.42, 0.22)
+    randomize: bool = True
+    friction: float = 0.4
+    peg_diameter: float = 0.030  # the nominal peg the hole is made for
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.clearance) and self.clearance > 0):
+            raise ConfigError("hole.clearance", f"must be > 0, got {self.clearance!r}")
+        _positive(self, "depth", "outer_radius", "friction", "peg_diameter", prefix="hole.")
+        if self.segments < 8:
+            raise ConfigError("hole.segments", f"must be >= 8, got {self.segments}")
+        if self.outer_radius <= self.diameter / 2 + 0.005:
+            raise ConfigError("hole.outer_radius", "must exceed the hole radius by at least 5 mm")
+
+    @property
+    def diameter(self) -> float:
+        return self.peg_diameter + self.clearance
+
+    @property
+    def radius(self) -> float:
+        return 0.5 * self.diameter
+
+    @property
+    def surface_tolerance(self) -> float:
+        """Largest radial deviation of the polygonal inner surface from the true circle [m]."""
+        return self.radius * (1.0 / math.cos(math.pi / self.segments) - 1.0)
+
+
+@dataclass(frozen=True)
+class GripperConfig:
+    """OnRobot RG2 (datasheet: stroke 0-110 mm, gripping force 3-40 N, 0.65 kg).
+
+    Attributes:
+        force: Force-limited closing force per finger pair [N], 3-40 N on the RG2.
+        stroke: Full opening [m].
+        pad_friction: Sliding friction of the finger pads.
+        pad_torsional_friction: Torsional friction of the pads [m] (MuJoCo's second friction
+            coefficient: the torque limit is this times the normal force).
+        pad_rolling_friction: Rolling friction of the pads [m].
+        closing_speed: Finger closing speed [m/s] (RG2: about 0.11 m/s full stroke in 1 s).
+    """
+
+    force: float = 40.0
+    stroke: float = 0.110
+    pad_friction: float = 1.0
+    pad_torsional_friction: float = 0.004
+    pad_rolling_friction: float = 0.0005
+    closing_speed: float = 0.11
+
+    def __post_init__(self) -> None:
+        if not (3.0 <= self.force <= 40.0):
+            raise ConfigError("gripper.force", f"the RG2 grips with 3-40 N, got {self.force!r}")
+        _positive(self, "stroke", "pad_friction", "closing_speed", prefix="gripper.")
+        _non_negative(self, "pad_torsional_friction", "pad_rolling_friction", prefix="gripper.")
+
+
+@dataclass(frozen=True)
+class FTSensorConfig:
+    """Wrist force/torque sensor between flange and gripper.
+
+    Attributes:
+        force_noise: Standard deviation of white noise on each force axis [N].
+        torque_noise: Standard deviation of white noise on each torque axis [N m].
+        cutoff_hz: First-order low-pass filter cut-off [Hz]; 0 disables the filter.
+    """
+
+    force_noise: float = 0.05
+    torque_noise: float = 0.002
+    cutoff_hz: float = 30.0
+
+    def __post_init__(self) -> None:
+        _non_negative(self, "force_noise", "torque_noise", "cutoff_hz", prefix="ft.")
+
+
+@dataclass(frozen=True)
+class CameraConfig:
+    """Overhead RGB-D camera reprojected to an orthographic heightmap.
+
+    Attributes:
+        size: Heightmap side [px].
+        pixel_size: Metres per pixel.
+        center_xy: Workspace centre in the world frame [m].
+        height: Camera height above the table [m] (ray origins).
+        depth_noise: Standard deviation of depth noise [m].
+    """
+
+    size: int = 224
+    pixel_size: float = 0.002
+    center_xy: tuple[float, float] = (0.42, -0.12)
+    height: float = 0.8
+    depth_noise: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.size < 16:
+            raise ConfigError("camera.size", f"must be >= 16 px, got {self.size}")
+        _positive(self, "pixel_size", "height", prefix="camera.")
+        _non_negative(self, "depth_noise", prefix="camera.")
+
+    @property
+    def extent(self) -> float:
+        """Side of the square workspace [m]."""
+        return self.size * self.pixel_size
+
+
+@dataclass(frozen=True)
+class SimConfig:
+    """Physics settings.
+
+    Attributes:
+        timestep: MuJoCo time step [s].
+        control_decimation: Physics steps per controller update (controller rate =
+            1 / (timestep * control_decimation)).
+        contact_timeconst: Time constant of the peg/hole/pad contacts [s] (solref); must be at
+            least twice the time step.
+        impratio: Ratio of frictional to normal constraint impedance (MuJoCo ``impratio``);
+            values > 1 make static friction stiffer, which a friction grasp needs.
+    """
+
+    timestep: float = 0.002
+    control_decimation: int = 5
+    contact_timeconst: float = 0.004
+    impratio: float = 10.0
+    noslip_iterations: int = 0
+
+    def __post_init__(self) -> None:
+        _positive(self, "timestep", "contact_timeconst", "impratio", prefix="sim.")
+        if self.control_decimation < 1:
+            raise ConfigError("sim.control_decimation", "must be >= 1")
+        if self.contact_timeconst < 2 * self.timestep:
+            raise ConfigError("sim.contact_timeconst", "must be at least twice sim.timestep")
+
+    @property
+    def control_dt(self) -> float:
+        return self.timestep * self.control_decimation
+
+
+@dataclass(frozen=True)
+class CellConfig:
+    """The whole assembly cell."""
+
+    peg: PegConfig = field(default_factory=PegConfig)
+    hole: HoleConfig = field(default_factory=HoleConfig)
+    gripper: GripperConfig = field(default_factory=GripperConfig)
+    ft: FTSensorConfig = field(default_factory=FTSensorConfig)
+    camera: CameraConfig = field(default_factory=CameraConfig)
+    sim: SimConfig = field(default_factory=SimConfig)
+
+    def __post_init__(self) -> None:
+        if self.hole.diameter <= self.peg.diameter and self.hole.peg_diameter == self.peg.diameter:
+            raise ConfigError("hole.clearance", "the hole must be larger than the peg")
+        if self.hole.depth > self.peg.length:
+            raise ConfigError("hole.depth", "must not exceed the peg length")
+
+
+# ----------------------------------------------------------------------------------------------
+# Control and assembly
+# ----------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ControllerConfig:
+    """Cartesian admittance controller on top of stiff joint servos.
+
+    The commanded TCP pose x_c follows the virtual dynamics
+    ``M_a * xdd_c + D_a * xd_c + K_a * (x_c - x_ref) = f_ext`` (per axis, translation and
+    rotation separately), where f_ext is the tared F/T wrench. ``D_a`` is chosen for critical
+    damping: ``D_a = 2 * zeta * sqrt(K_a * M_a)``.
+
+    Attributes:
+        trans_stiffness: K_a, translation [N/m].
+        rot_stiffness: K_a, rotation [N m/rad].
+        trans_mass: M_a, translation [kg].
+        rot_inertia: M_a, rotation [kg m^2].
+        damping_ratio: zeta of the virtual dynamics.
+        joint_kp: Joint servo stiffness [N m/rad] of the UR5 position loop (MuJoCo position
+            actuators; implicit damping keeps them stable at the physics time step).
+        joint_kv: Joint servo damping [N m s/rad].
+        max_speed: Largest commanded TCP speed [m/s].
+        max_angular_speed: Largest commanded TCP angular speed [rad/s].
+    """
+
+    trans_stiffness: float = 2000.0
+    rot_stiffness: float = 40.0
+    trans_mass: float = 4.0
+    rot_inertia: float = 0.02
+    damping_ratio: float = 1.0
+    joint_kp: tuple[float, ...] = (6000.0, 6000.0, 4000.0, 1500.0, 1500.0, 1500.0)
+    joint_kv: tuple[float, ...] = (300.0, 300.0, 200.0, 40.0, 40.0, 40.0)
+    max_speed: float = 0.25
+    max_angular_speed: float = 1.5
+
+    def __post_init__(self) -> None:
+        _positive(
+            self, "trans_stiffness", "rot_stiffness", "trans_mass", "rot_inertia",
+            "damping_ratio", "max_speed", "max_angular_speed", prefix="controller.",
+        )
+        if len(self.joint_kp) != 6 or len(self.joint_kv) != 6:
+            raise ConfigError("controller.joint_kp", "needs six values, one per UR5 joint")
+
+
+@dataclass(frozen=True)
+class AssemblyConfig:
+    """The compliance-based assembly module (paper 3.2, Figure 5).
+
+    Attributes:
+        insertion_depth: K in delta = arctan(clearance / K) [m] (paper eq. 1).
+        approach_height: Height of the peg tip above the hole surface before contact [m].
+        contact_force: Force threshold that declares plane contact [N].
+        press_force: Constant downward force during search and alignment [N].
+        search_tilt_deg: Tilt of the peg during the spiral search [deg]; the leading rim point
+            drops into the hole first and produces two-point contact.
+        spiral_pitch: Radial growth of the Archimedes spiral per turn [m]; by default the
+            hole's clearance plus the peg radius times the search tilt's sine is not needed: a
+            pitch of a few millimetres makes the leading rim point sweep every point.
+        spiral_speed: Tangential speed of the spiral [m/s].
+        drop_threshold: Drop of the TCP below the plane-contact height that declares two-point
+            contact [m].
+        slide_speed: Speed of the sliding phase [m/s].
+        three_point_force: Lateral contact force that declares three-point contact [N].
+        wiggle_amplitude_deg: Amplitude of the wiggle rotation [deg].
+        wiggle_period: Period of one wiggle [s].
+        align_gain: Rotation per measured contact moment [rad / (N m)] in the alignment phase.
+        insert_speed: Insertion speed [m/s].
+        timeouts: Per-phase timeouts in simulated seconds.
+    """
+
+    insertion_depth: float = 0.030
+    approach_height: float = 0.010
+    contact_force: float = 3.0
+    press_force: float = 10.0
+    search_tilt_deg: float = 6.0
+    spiral_pitch: float = 0.004
+    spiral_speed: float = 0.01
+    drop_threshold: float = 0.0015
+    slide_speed: float = 0.004
+    three_point_force: float = 3.0
+    wiggle_amplitude_deg: float = 1.0
+    wiggle_period: float = 1.0
+    align_gain: float = 0.5
+    insert_speed: float = 0.01
+    timeouts: tuple[tuple[str, float], ...] = (
+        ("transport", 20.0),
+        ("approach", 10.0),
+        ("search", 120.0),
+        ("slide", 30.0),
+        ("align", 60.0),
+        ("insert", 30.0),
+    )
+
+    def __post_init__(self) -> None:
+        _positive(
+            self, "insertion_depth", "approach_height", "contact_force", "press_force",
+            "spiral_pitch", "spiral_speed", "drop_threshold", "slide_speed", "three_point_force",
+            "wiggle_period", "insert_speed", prefix="assembly.",
+        )
+        _non_negative(self, "search_tilt_deg", "wiggle_amplitude_deg", "align_gain",
+                      prefix="assembly.")
+        for name, value in self.timeouts:
+            if value <= 0:
+                raise ConfigError(f"assembly.timeouts.{name}", f"must be > 0, got {value}")
+
+    def timeout(self, phase: str) -> float:
+        return dict(self.timeouts)[phase]
+
+
+# ----------------------------------------------------------------------------------------------
+# Grasp learning
+# ----------------------------------------------------------------------------------------------
+
+BACKBONES = ("densenet121", "light")
+
+
+@dataclass(frozen=True)
+class NetworkConfig:
+    """Fully convolutional grasp Q network (paper 3.1).
+
+    Attributes:
+        backbone: ``densenet121`` (paper) or ``light`` (fast CPU runs).
+        num_rotations: Number of grasp orientations R over 180 degrees.
+        weights: Optional path of a local weights file for the trunks.
+        depth_mean: Mean subtracted from the depth heightmap [m].
+        depth_std: Scale dividing the depth heightmap [m].
+    """
+
+    backbone: str = "densenet121"
+    num_rotations: int = 16
+    weights: str | None = None
+    depth_mean: float = 0.01
+    depth_std: float = 0.03
+
+    def __post_init__(self) -> None:
+        if self.backbone not in BACKBONES:
+            raise ConfigError("network.backbone", f"must be one of {BACKBONES}, got {self.backbone!r}")
+        if self.num_rotations < 1:
+            raise ConfigError("network.num_rotations", "must be >= 1")
+        _positive(self, "depth_std", prefix="network.")
+
+
+@dataclass(frozen=True)
+class AgentConfig:
+    """DQN agent (paper eq. 4-11).
+
+    Attributes:
+        learning_rate: SGD learning rate (paper: 1e-4).
+        momentum: SGD momentum (paper: 0.9).
+        weight_decay: L2 weight decay.
+        gamma: Future discount (paper: 0.5).
+        epsilon_start: Initial exploration rate (paper: 0.5).
+        epsilon_end: Final exploration rate (paper: 0.1).
+        random_episodes: Grasps chosen at random before the greedy phase (paper: 1000).
+        target_update_period: Updates between copies of the evaluation into the target network.
+        replay_capacity: Stored transitions.
+        replay_batch: Extra prioritised replays per episode.
+        delta_q_threshold: Convergence threshold on Delta Q = |Q_tar - Q_eva| (eq. 10).
+        delta_q_window: Episodes over which Delta Q must stay under the threshold.
+    """
+
+    learning_rate: float = 1e-4
+    momentum: float = 0.9
+    weight_decay: float = 2e-5
+    gamma: float = 0.5
+    epsilon_start: float = 0.5
+    epsilon_end: float = 0.1
+    random_episodes: int = 1000
+    target_update_period: int = 50
+    replay_capacity: int = 5000
+    replay_batch: int = 1
+    delta_q_threshold: float = 0.02
+    delta_q_window: int = 100
+
+    def __post_init__(self) -> None:
+        _positive(self, "learning_rate", "delta_q_threshold", prefix="agent.")
+        _fraction(self, "momentum", "gamma", "epsilon_start", "epsilon_end", prefix="agent.")
+        for name in ("random_episodes", "replay_batch"):
+            if getattr(self, name) < 0:
+                raise ConfigError(f"agent.{name}", "must be >= 0")
+        for name in ("target_update_period", "replay_capacity", "delta_q_window"):
+            if getattr(self, name) < 1:
+                raise ConfigError(f"agent.{name}", "must be >= 1")
+
+
+@dataclass(frozen=True)
+class RewardConfig:
+    """Rewards (paper eq. 5).
+
+    Attributes:
+        grasp: r_G for a successful grasp.
+        assembly: r_AM when the assembly is faster than the threshold (VGS mode only).
+        threshold_s: Assembly-time threshold [s]; ``None`` derives it from the assembly times
+            of the random-exploration phase.
+        threshold_percentile: Percentile of the exploration-phase times used when
+            ``threshold_s`` is ``None``.
+    """
+
+    grasp: float = 0.3
+    assembly: float = 0.7
+    threshold_s: float | None = None
+    threshold_percentile: float = 50.0
+
+    def __post_init__(self) -> None:
+        _non_negative(self, "grasp", "assembly", prefix="reward.")
+        if self.threshold_s is not None and not self.threshold_s > 0:
+            raise ConfigError("reward.threshold_s", "must be > 0 when given")
+        if not 0.0 < self.threshold_percentile < 100.0:
+            raise ConfigError("reward.threshold_percentile", "must lie in (0, 100)")
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """Training run.
+
+    Attributes:
+        episodes: Grasp-and-assemble episodes in all (paper: 5000).
+        checkpoint_every: Episodes between checkpoints.
+        device: ``cpu``, ``cuda`` or ``auto``.
+    """
+
+    episodes: int = 5000
+    checkpoint_every: int = 50
+    device: str = "auto"
+
+    def __post_init__(self) -> None:
+        if self.episodes < 1:
+            raise ConfigError("train.episodes", "must be >= 1")
+        if self.checkpoint_every < 1:
+            raise ConfigError("train.checkpoint_every", "must be >= 1")
+        if self.device not in ("cpu", "cuda", "auto"):
+            raise ConfigError("train.device", f"must be cpu, cuda or auto, got {self.device!r}")
+
+
+@dataclass(frozen=True)
+class EvalConfig:
+    """Evaluation: test assemblies per policy and condition (paper: 1000)."""
+
+    episodes: int = 1000
+    mass_range: float = 0.15
+    length_range: float = 0.15
+
+    def __post_init__(self) -> None:
+        if self.episodes < 1:
+            raise ConfigError("eval.episodes", "must be >= 1")
+        _fraction(self, "mass_range", "length_range", prefix="eval.")
+
+
+@dataclass(frozen=True)
+class ExperimentConfig:
+    """Everything one experiment needs."""
+
+    name: str = "paper"
+    seed: int = 0
+    cell: CellConfig = field(default_factory=CellConfig)
+    controller: ControllerConfig = field(default_factory=ControllerConfig)
+    assembly: AssemblyConfig = field(default_factory=AssemblyConfig)
+    network: NetworkConfig = field(default_factory=NetworkConfig)
+    agent: AgentConfig = field(default_factory=AgentConfig)
+    reward: RewardConfig = field(default_factory=RewardConfig)
+    train: TrainConfig = field(default_factory=TrainConfig)
+    eval: EvalConfig = field(default_factory=EvalConfig)
+
+
+def _paper() -> ExperimentConfig:
+    return ExperimentConfig(name="paper")
+
+
+def _quick() -> ExperimentConfig:
+    return ExperimentConfig(
+        name="quick",
+        network=NetworkConfig(backbone="light", num_rotations=8),
+        agent=AgentConfig(random_episodes=40, target_update_period=10, delta_q_window=20),
+        train=TrainConfig(episodes=160, checkpoint_every=20),
+        eval=EvalConfig(episodes=60),
+    )
+
+
+def _smoke() -> ExperimentConfig:
+    return ExperimentConfig(
+        name="smoke",
+        network=NetworkConfig(backbone="light", num_rotations=4),
+        agent=AgentConfig(random_episodes=2, target_update_period=2, delta_q_window=2,
+                          replay_capacity=64),
+        train=TrainConfig(episodes=4, checkpoint_every=2),
+        eval=EvalConfig(episodes=4),
+    )
+
+
+PROFILES = {"smoke": _smoke, "quick": _quick, "paper": _paper}
+
+
+def profile(name: str) -> ExperimentConfig:
+    """Return the named profile.
+
+    Raises:
+        ConfigError: If the profile is unknown.
+    """
+    try:
+        return PROFILES[name]()
+    except KeyError:
+        raise ConfigError("profile", f"unknown profile {name!r}; choose from {sorted(PROFILES)}")
+
+
+def override(cfg: Any, path: str, value: Any) -> Any:
+    """Return a copy of a nested frozen dataclass with the dotted field ``path`` set to ``value``.
+
+    Example: ``override(cfg, "cell.peg.mass", 0.6)``. Validation runs again on every level.
+
+    Raises:
+        ConfigError: If the path names no field or the value is invalid.
+    """
+    head, _, rest = path.partition(".")
+    if not is_dataclass(cfg) or head not in {f.name for f in fields(cfg)}:
+        raise ConfigError(path, "no such configuration field")
+    if rest:
+        return replace(cfg, **{head: override(getattr(cfg, head), rest, value)})
+    return replace(cfg, **{head: value})
+
+
+def to_dict(cfg: Any) -> dict[str, Any]:
+    """Plain-dict view (for JSON) of a configuration."""
+    return dataclasses.asdict(cfg)
+
+
+def from_dict(cls: type, data: dict[str, Any]) -> Any:
+    """Rebuild a nested frozen dataclass from :func:`to_dict` output."""
+    kwargs = {}
+    for f in fields(cls):
+        if f.name not in data:
+            continue
+        value = data[f.name]
+        ftype = f.type if isinstance(f.type, type) else globals().get(str(f.type), None)
+        if isinstance(ftype, type) and is_dataclass(ftype) and isinstance(value, dict):
+            value = from_dict(ftype, value)
+        elif isinstance(value, list):
+            value = tuple(tuple(v) if isinstance(v, list) else v for v in value)
+        kwargs[f.name] = value
+    return cls(**kwargs)
