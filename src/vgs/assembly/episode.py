@@ -1,0 +1,170 @@
+"""One episode: reset the cell, look, grasp, assemble, record.
+
+The grasp comes from a *policy* that sees only the heightmap and returns
+:class:`GraspCommand` (world x, y, pad heading); the cell's ground truth is read only to fill
+the analysis fields of the record.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from vgs.assembly.grasp import grasp
+from vgs.assembly.record import EpisodeRecord
+from vgs.assembly.strategy import AssemblyModule
+from vgs.config import ExperimentConfig, PegConfig
+from vgs.control.robot import Robot
+from vgs.control.transforms import tilt_angle
+from vgs.errors import SimulationError
+from vgs.sim.camera import Heightmap, RayCastCamera
+from vgs.sim.cell import Cell
+
+PEG_PIXEL_HEIGHT = 0.005  # heightmap cells higher than this belong to the object [m]
+
+
+@dataclass(frozen=True)
+class GraspCommand:
+    """Where to grasp: world x, y [m] and the heading of the pads' long side [rad]."""
+
+    x: float
+    y: float
+    yaw: float
+
+
+Policy = Callable[[Heightmap], GraspCommand]
+
+
+def peg_axis_from_heightmap(hm: Heightmap) -> tuple[np.ndarray, np.ndarray, float]:
+    """Centroid (world x, y), unit axis and visible length of the object in the heightmap.
+
+    The principal axis of the object pixels (height > 5 mm) is the peg's axis; its extent along
+    the axis is the visible length.
+
+    Raises:
+        SimulationError: If no object is visible.
+    """
+    rows, cols = np.nonzero(hm.depth > PEG_PIXEL_HEIGHT)
+    if rows.size < 10:
+        raise SimulationError("no object in the heightmap")
+    xs, ys = hm.pixel_to_world(rows, cols)
+    pts = np.stack([xs, ys], axis=1)
+    center = pts.mean(axis=0)
+    cov = np.cov((pts - center).T)
+    evals, evecs = np.linalg.eigh(cov)
+    axis = evecs[:, int(np.argmax(evals))]
+    proj = (pts - center) @ axis
+    return center, axis, float(proj.max() - proj.min() + hm.pixel_size)
+
+
+def offset_policy(offset: float) -> Policy:
+    """Grasp the peg ``offset`` metres from its visible centre along its visible axis."""
+
+    def policy(hm: Heightmap) -> GraspCommand:
+        center, axis, _ = peg_axis_from_heightmap(hm)
+        p = center + offset * axis
+        return GraspCommand(float(p[0]), float(p[1]), math.atan2(axis[1], axis[0]))
+
+    return policy
+
+
+def center_policy() -> Policy:
+    """The heuristic grasp: the centre of the visible peg, pads along its axis."""
+    return offset_policy(0.0)
+
+
+class EpisodeRunner:
+    """Runs episodes; keeps one compiled cell per peg geometry.
+
+    Args:
+        cfg: Experiment configuration.
+    """
+
+    def __init__(self, cfg: ExperimentConfig) -> None:
+        self.cfg = cfg
+        self._cells: dict[tuple[float, float], tuple[Cell, RayCastCamera]] = {}
+
+    def cell(self, peg: PegConfig) -> tuple[Cell, RayCastCamera]:
+        key = (round(peg.mass, 9), round(peg.length, 9))
+        if key not in self._cells:
+            if len(self._cells) > 8:
+                self._cells.clear()
+            cell_cfg = replace(self.cfg.cell, peg=peg)
+            ctrl = self.cfg.controller
+            cell = Cell(cell_cfg, ctrl.joint_kp, ctrl.joint_kv)
+            self._cells[key] = (cell, RayCastCamera(cell.model, cell_cfg.camera))
+        return self._cells[key]
+
+    def observe(self, seed: int, peg: PegConfig | None = None) -> Heightmap:
+        """Reset the cell for ``seed`` and return the heightmap the policy sees."""
+        cell, cam = self.cell(peg or self.cfg.cell.peg)
+        cell.reset(np.random.default_rng(seed))
+        return cam.capture(cell.data)
+
+    def run(self, seed: int, policy: Policy, peg: PegConfig | None = None,
+            trace: bool = False) -> tuple[EpisodeRecord, Robot, Heightmap]:
+        """Run one whole episode.
+
+        Args:
+            seed: Episode seed: sets the peg pose, the hole displacement and the sensor noise.
+            policy: Chooses the grasp from the heightmap.
+            peg: Peg of this episode (default: the configured one).
+            trace: Keep per-tick signals in ``robot.trace``.
+
+        Returns:
+            The record, the robot (for its trace) and the heightmap.
+        """
+        peg = peg or self.cfg.cell.peg
+        cell, cam = self.cell(peg)
+        rng = np.random.default_rng(seed)
+        cell.reset(rng)
+        hm = cam.capture(cell.data)
+        record = EpisodeRecord(seed=seed, peg_mass=peg.mass, peg_length=peg.length)
+        record.hole_offset_mm = float(np.linalg.norm(cell.hole_xy - cell.cfg.hole.nominal_xy)
+                                      * 1000)
+        robot = Robot(cell, self.cfg.controller, np.random.default_rng([seed, 1]), trace=trace)
+        try:
+            command = policy(hm)
+            row, col = hm.world_to_pixel(command.x, command.y)
+            inside = 0 <= row < hm.depth.shape[0] and 0 <= col < hm.depth.shape[1]
+            surface = float(hm.depth[row, col]) if inside else 0.0
+            robot.run(0.2)
+            robot.ft.tare()  # tool only, before the grasp
+            result = grasp(robot, command.x, command.y, command.yaw, surface)
+        except SimulationError:
+            record.failure_reason = "unstable"
+            return record, robot, hm
+        record.grasp_success = result.success
+        record.grasp_offset = result.offset
+        if not result.success:
+            record.failure_reason = "grasp"
+            return record, robot, hm
+        nominal = self.cfg.cell.peg
+        module = AssemblyModule(robot, self.cfg.assembly, nominal, self.cfg.cell.hole.nominal_xy,
+                                self.cfg.cell.hole.depth, self.cfg.cell.hole.clearance)
+        module.run(record)
+        self._ground_truth(cell, record)
+        return record, robot, hm
+
+    def _ground_truth(self, cell: Cell, record: EpisodeRecord) -> None:
+        """Fill the analysis fields from the simulator state (never used by the controller)."""
+        p, R = cell.peg_pose()
+        if not np.all(np.isfinite(p)):
+            record.success = False
+            record.failure_reason = "unstable"
+            return
+        axis = R[:, 2]
+        record.final_tilt_deg = math.degrees(tilt_angle(axis, np.array([0.0, 0.0, 1.0])))
+        half = 0.5 * cell.cfg.peg.length * axis
+        low = min(p + half, p - half, key=lambda v: v[2])
+        entrance = cell.hole_position()
+        record.insertion_depth_mm = float((entrance[2] - low[2]) * 1000)
+        radial = float(np.linalg.norm(low[:2] - entrance[:2]))
+        inserted = (record.insertion_depth_mm >= 0.9 * self.cfg.assembly.insertion_depth * 1000
+                    and radial < cell.cfg.hole.radius)
+        if record.success and not inserted:
+            record.success = False
+            record.failure_reason = "not_inserted"

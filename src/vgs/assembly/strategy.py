@@ -1,0 +1,343 @@
+"""Compliance-based peg-in-hole assembly (paper Section 3.2, Figure 5) as a state machine.
+
+Phases, each with its own timeout, every decision from the F/T signal and the robot's own joint
+state (never the hole's true pose, never the contact list):
+
+``transport``
+    With the peg still horizontal, the tared F/T reading gives the peg's weight ``f_z = m g`` and
+    the moment of its centre of mass about the pads, ``tau_y = -m g c`` (``c``: the centre's
+    position along the pads' long side). The wrist turns the peg upright about the pinch axis
+    so that the longer part hangs down (``c`` sets which way), and carries it above the
+    *nominal* hole position. The estimated hanging length is ``h = L_nominal / 2 + |c|``.
+``approach``
+    The F/T sensor is tared once at this nominal upright pose. The peg is tilted by the search
+    tilt about the pinch axis (around its estimated lower end) and lowered in a guarded move until
+    the vertical contact force exceeds ``contact_force``: plane contact (Figure 2a).
+``search``
+    Force control in z (press with ``press_force``), the lowest rim point driven along an
+    Archimedes spiral ``r = pitch * theta / (2 pi)`` around the nominal hole centre at constant
+    tangential speed. When the TCP drops ``drop_threshold`` below the plane-contact height, the
+    leading rim point has fallen over the hole edge: two-point contact (Figure 2b).
+``slide``
+    Pressing on, the lateral axes become force-controlled with a bias force towards the lowest
+    rim point; the hole's reaction (pointing to the hole centre, Figure 3a) and the bias slide
+    the peg until the leading rim meets the far wall and the lateral motion stops: three-point
+    contact (Figure 2c).
+``align``
+    Wiggle alignment: each adjustment rotates the peg back towards upright about its estimated
+    lower end by an amount set by the measured contact moment, superposes one wiggle
+    oscillation, and checks whether the peg has slid into the hole (TCP below the three-point
+    height by ``entry_depth``) with a small moment. The measured moment contains the peg's
+    gravitational and inertial disturbing moments about the pads (paper eq. 2, 3), which depend
+    on where the peg is held: the controller cannot tell them from contact moments.
+``insert``
+    Force-controlled push to the insertion depth K; a stall triggers one more wiggle adjustment.
+    Then the gripper opens and the arm retracts.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from vgs.assembly.record import EpisodeRecord
+from vgs.config import AssemblyConfig, PegConfig
+from vgs.control.robot import Robot
+from vgs.control.transforms import exp_so3, rot_y, rot_z
+from vgs.errors import SimulationError
+
+GRAVITY = 9.81
+ENTRY_DEPTH = 0.004  # descent below the three-point height that means "entered the hole" [m]
+SETTLE_TIME = 0.3  # still time before taring [s]
+
+
+class PhaseTimeout(Exception):
+    """A phase ran past its timeout."""
+
+    def __init__(self, phase: str) -> None:
+        super().__init__(phase)
+        self.phase = phase
+
+
+@dataclass
+class PegEstimate:
+    """What the controller believes about the held peg (from F/T and the nominal product data)."""
+
+    mass: float
+    com_x: float  # centre of mass along the tool x axis, from the pads [m]
+    down_sign: float  # +1: tool +x points down after turning upright
+    hanging: float  # estimated distance from pads to the lower end [m]
+
+
+class AssemblyModule:
+    """Runs the assembly phases on a robot that holds a peg.
+
+    Args:
+        robot: The robot, after a successful grasp (peg horizontal, tool pointing down).
+        cfg: Assembly configuration.
+        nominal_peg: Nominal peg data (the product drawing the controller knows).
+        nominal_hole_xy: Nominal hole centre (the fixture drawing) [m].
+        hole_surface_z: Nominal height of the hole's top face [m].
+        clearance: Nominal diametral clearance [m] (sets delta = arctan(clearance / K)).
+    """
+
+    def __init__(self, robot: Robot, cfg: AssemblyConfig, nominal_peg: PegConfig,
+                 nominal_hole_xy: tuple[float, float], hole_surface_z: float,
+                 clearance: float) -> None:
+        self.robot = robot
+        self.cfg = cfg
+        self.peg = nominal_peg
+        self.hole_xy = np.asarray(nominal_hole_xy, dtype=float)
+        self.surface_z = hole_surface_z
+        self.delta = math.atan(clearance / cfg.insertion_depth)  # paper eq. 1
+        self.adjustments = 0
+        self.phase_start = 0.0
+        self.phase_times: dict[str, float] = {}
+        self.estimate: PegEstimate | None = None
+
+    # -- bookkeeping --------------------------------------------------------------------------
+
+    def _begin(self, phase: str) -> None:
+        self.robot.phase = phase
+        self.phase_start = self.robot.time
+
+    def _end(self, phase: str) -> None:
+        self.phase_times[phase] = self.robot.time - self.phase_start
+
+    def _check_timeout(self, phase: str) -> None:
+        if self.robot.time - self.phase_start > self.cfg.timeout(phase):
+            raise PhaseTimeout(phase)
+
+    # -- the whole module --------------------------------------------------------------------
+
+    def run(self, record: EpisodeRecord) -> None:
+        """Run all phases, filling ``record`` (times, adjustments, failure reason)."""
+        start = self.robot.time
+        try:
+            for phase, method in (
+                ("transport", self.transport),
+                ("approach", self.approach),
+                ("search", self.search),
+                ("slide", self.slide),
+                ("align", self.align),
+                ("insert", self.insert),
+            ):
+                self._begin(phase)
+                method()
+                self._end(phase)
+            record.success = True
+        except PhaseTimeout as exc:
+            self._end(exc.phase)
+            record.failure_reason = f"timeout:{exc.phase}"
+        except SimulationError:
+            record.failure_reason = "unstable"
+        record.assembly_time = self.robot.time - start
+        record.phase_times.update(self.phase_times)
+        record.adjustments = self.adjustments
+        self.release()
+
+    # -- phases -------------------------------------------------------------------------------
+
+    def estimate_peg(self) -> PegEstimate:
+        """Weight and moment of the held peg from the F/T sensor (tared before the grasp)."""
+        w = self.robot.arm.wrench_sensor
+        mass = max(w[2], 0.05) / GRAVITY
+        com_x = -w[4] / max(w[2], 0.05)
+        sign = 1.0 if com_x >= 0 else -1.0
+        hanging = 0.5 * self.peg.length + abs(com_x)
+        return PegEstimate(mass=mass, com_x=com_x, down_sign=sign, hanging=hanging)
+
+    def transport(self) -> None:
+        robot = self.robot
+        robot.run(SETTLE_TIME)
+        est = self.estimate = self.estimate_peg()
+        p0, R0 = robot.arm.tcp_pose()
+        # Stage 1 (tool still pointing down): yaw about the vertical so that, after stage 2,
+        # the tool axis points radially away from the robot base: a wrist-3 motion.
+        radial = math.atan2(self.hole_xy[1], self.hole_xy[0])
+        x_heading = radial if est.down_sign < 0 else radial + math.pi
+        yaw_now = math.atan2(R0[1, 0], R0[0, 0])
+        dyaw = (x_heading - yaw_now + math.pi) % (2 * math.pi) - math.pi
+        R_yaw = rot_z(dyaw) @ R0
+        # Stage 2: roll about the pinch axis (tool y) so that the longer part hangs down.
+        R_asm = R_yaw @ rot_y(-est.down_sign * math.pi / 2)
+        self.R_asm = R_asm
+        target = np.array([*self.hole_xy, self.surface_z + est.hanging + 0.03])
+        lift = p0 + np.array([0.0, 0.0, 0.06])
+        robot.move_to(lift, R_yaw, speed=0.2, angular_speed=1.5, settle=0.0)
+        above = np.array([target[0], target[1], lift[2]])
+        robot.move_to(above, R_asm, speed=0.25, angular_speed=1.2, settle=0.0)
+        self._check_timeout("transport")
+        robot.move_to(target, R_asm, speed=0.15, angular_speed=1.2, settle=SETTLE_TIME)
+        self._check_timeout("transport")
+
+    def _down(self) -> np.ndarray:
+        """Estimated peg axis pointing down, from the commanded tool orientation."""
+        return self.estimate.down_sign * self.robot.arm.R_ref[:, 0]
+
+    def _tip(self) -> np.ndarray:
+        """Estimated centre of the peg's lower face, from the measured TCP pose."""
+        p, R = self.robot.arm.tcp_pose()
+        return p + self.estimate.hanging * self.estimate.down_sign * R[:, 0]
+
+    def _lowest_rim_offset(self, R_tcp: np.ndarray) -> np.ndarray:
+        """Vector from the lower face's centre to its lowest rim point for tool attitude R."""
+        axis = self.estimate.down_sign * R_tcp[:, 0]
+        v = np.array([0.0, 0.0, -1.0]) - np.dot([0.0, 0.0, -1.0], axis) * axis
+        n = np.linalg.norm(v)
+        return np.zeros(3) if n < 1e-9 else self.peg.radius * v / n
+
+    def approach(self) -> None:
+        robot, cfg, est = self.robot, self.cfg, self.estimate
+        robot.ft.tare()  # once, at the nominal upright pose
+        p, R = robot.arm.p_ref.copy(), robot.arm.R_ref.copy()
+        # Tilt about the pinch axis (tool y) around the estimated lower end.
+        axis = R[:, 1]
+        self.tilt_axis = axis
+        psi = math.radians(cfg.search_tilt_deg)
+        Rt = exp_so3(psi * axis)
+        tip = p + est.hanging * est.down_sign * R[:, 0]
+        R_tilt = Rt @ R
+        p_tilt = tip + Rt @ (p - tip)
+        # Place the lowest rim point above the nominal hole centre, approach_height above it.
+        low = tip + self._lowest_rim_offset(R_tilt)
+        shift = np.array([*(self.hole_xy - low[:2]),
+                          self.surface_z + cfg.approach_height - low[2]])
+        robot.move_to(p_tilt + shift, R_tilt, speed=0.05, angular_speed=0.5, settle=SETTLE_TIME)
+        self.low_rim_from_tcp = (low + shift) - (p_tilt + shift)
+        robot.arm.set_compliant(True)
+        robot.arm.admittance.set_stiffness(np.array(
+            [2000.0, 2000.0, 0.0, self.robot.cfg.rot_stiffness * 10, self.robot.cfg.rot_stiffness
+             * 10, self.robot.cfg.rot_stiffness * 10]))
+        robot.arm.admittance.wrench_des[:] = [0.0, 0.0, -cfg.contact_force * 2, 0, 0, 0]
+        while robot.arm.wrench[2] < cfg.contact_force:
+            robot.run(robot.dt)
+            self._check_timeout("approach")
+        self.z_contact = robot.arm.tcp_pose()[0][2]
+
+    def search(self) -> None:
+        robot, cfg = self.robot, self.cfg
+        adm = robot.arm.admittance
+        adm.wrench_des[2] = -cfg.press_force
+        robot.arm.absorb_offset()
+        adm.set_stiffness(np.array([2000.0, 2000.0, 0.0, *[self.robot.cfg.rot_stiffness * 10] * 3]))
+        center = robot.arm.p_ref[:2].copy()
+        theta = 0.0
+        b = cfg.spiral_pitch / (2 * math.pi)
+        z_ref = self.z_contact
+        while True:
+            r = b * theta
+            # d(theta)/dt = v / sqrt(r^2 + b^2): constant tangential speed on the spiral.
+            theta += cfg.spiral_speed * robot.dt / math.hypot(r, b * 2)
+            p_ref = robot.arm.p_ref.copy()
+            p_ref[:2] = center + r * np.array([math.cos(theta), math.sin(theta)])
+            robot.arm.set_reference(p_ref, robot.arm.R_ref)
+            robot.tick()
+            z = robot.arm.tcp_pose()[0][2]
+            z_ref = max(z_ref, z) if r < 1e-3 else z_ref
+            if z < z_ref - cfg.drop_threshold:
+                break
+            self._check_timeout("search")
+
+    def slide(self) -> None:
+        robot, cfg = self.robot, self.cfg
+        adm = robot.arm.admittance
+        robot.arm.absorb_offset()
+        lead = self.low_rim_from_tcp[:2] / max(np.linalg.norm(self.low_rim_from_tcp[:2]), 1e-9)
+        self.lead = lead
+        adm.set_stiffness(np.array([0.0, 0.0, 0.0, *[self.robot.cfg.rot_stiffness * 10] * 3]))
+        adm.wrench_des[:3] = [*(cfg.three_point_force * lead), -cfg.press_force]
+        still = 0.0
+        last = robot.arm.tcp_pose()[0][:2]
+        window = 0.2
+        while still < 0.3:
+            robot.run(window)
+            now = robot.arm.tcp_pose()[0][:2]
+            still = still + window if np.linalg.norm(now - last) < cfg.slide_speed * window else 0.0
+            last = now
+            self._check_timeout("slide")
+        self.z_three = robot.arm.tcp_pose()[0][2]
+
+    def align(self) -> None:
+        robot, cfg = self.robot, self.cfg
+        adm = robot.arm.admittance
+        est = self.estimate
+        axis = self.tilt_axis
+        amp = math.radians(cfg.wiggle_amplitude_deg)
+        # Rotational compliance about the pinch axis during alignment.
+        adm.set_stiffness(np.array([0.0, 0.0, 0.0, *[self.robot.cfg.rot_stiffness] * 3]))
+        n_wiggle = max(2, int(round(cfg.wiggle_period / robot.dt)))
+        while True:
+            robot.arm.absorb_offset()
+            tilt = self._commanded_tilt()
+            moment = float(np.dot(robot.arm.wrench[3:], axis))
+            # Rotate back towards upright: the commanded tilt, corrected by the measured moment
+            # (a contact moment about the pinch axis says the peg bears on one side).
+            step = -tilt + cfg.align_gain * moment
+            step = max(-math.radians(3.0), min(math.radians(3.0), step))
+            self._rotate_about_tip(step, n_wiggle // 2)
+            # One wiggle: +amp, -amp, back, about the estimated lower end.
+            for sgn in (1.0, -2.0, 1.0):
+                self._rotate_about_tip(sgn * amp, n_wiggle // 4)
+            self.adjustments += 1
+            z = robot.arm.tcp_pose()[0][2]
+            moment = float(np.dot(robot.arm.wrench[3:], axis))
+            if (z < self.z_three - ENTRY_DEPTH and abs(self._commanded_tilt()) < self.delta + amp
+                    and abs(moment) < 0.3):
+                return
+            self._check_timeout("align")
+
+    def _commanded_tilt(self) -> float:
+        """Signed angle of the commanded peg axis from vertical, about the tilt axis."""
+        down = self._down()
+        return math.atan2(float(np.dot(np.cross([0.0, 0.0, -1.0], down), self.tilt_axis)),
+                          float(-down[2]))
+
+    def _rotate_about_tip(self, angle: float, n_ticks: int) -> None:
+        robot = self.robot
+        p0, R0 = robot.arm.p_ref.copy(), robot.arm.R_ref.copy()
+        tip = p0 + self.estimate.hanging * self.estimate.down_sign * R0[:, 0]
+        n = max(1, n_ticks)
+        for k in range(1, n + 1):
+            s = k / n
+            s = s * s * (3 - 2 * s)
+            Rk = exp_so3(s * angle * self.tilt_axis)
+            robot.arm.set_reference(tip + Rk @ (p0 - tip), Rk @ R0)
+            robot.tick()
+
+    def insert(self) -> None:
+        robot, cfg = self.robot, self.cfg
+        adm = robot.arm.admittance
+        robot.arm.absorb_offset()
+        adm.wrench_des[:] = [0.0, 0.0, -cfg.press_force, 0.0, 0.0, 0.0]
+        # Upright reference; compliance in the lateral axes and in rotation lets the hole guide.
+        down_now = self._down()
+        tilt = self._commanded_tilt()
+        del down_now
+        self._rotate_about_tip(-tilt, 10)
+        adm.set_stiffness(np.array([300.0, 300.0, 0.0, *[self.robot.cfg.rot_stiffness] * 3]))
+        z_target = self.z_contact - self.cfg.insertion_depth - 0.003
+        last_z = robot.arm.tcp_pose()[0][2]
+        n_wiggle = max(2, int(round(cfg.wiggle_period / robot.dt)))
+        amp = math.radians(cfg.wiggle_amplitude_deg)
+        while robot.arm.tcp_pose()[0][2] > z_target:
+            robot.run(0.25)
+            z = robot.arm.tcp_pose()[0][2]
+            if last_z - z < 0.25 * cfg.insert_speed * 0.25:
+                # Stalled (jammed): one more wiggle adjustment.
+                for sgn in (1.0, -2.0, 1.0):
+                    self._rotate_about_tip(sgn * amp, n_wiggle // 4)
+                self.adjustments += 1
+            last_z = z
+            self._check_timeout("insert")
+
+    def release(self) -> None:
+        robot = self.robot
+        robot.phase = "release"
+        robot.arm.set_compliant(False)
+        robot.gripper.command(robot.cell.cfg.gripper.stroke)
+        robot.run(0.6)
+        p, R = robot.arm.tcp_pose()
+        robot.move_to(p + np.array([0, 0, 0.08]), R, speed=0.1, settle=0.2)

@@ -1,0 +1,68 @@
+"""Cartesian admittance law.
+
+The commanded TCP pose is the reference pose plus a compliant offset ``e`` (3 translations in the
+world frame, 3 rotations as a rotation vector about world axes at the TCP) that obeys, per axis,
+
+    M e'' + D e' + K e = w_ext + w_des,
+
+with ``w_ext`` the tared external wrench at the TCP and ``w_des`` a desired wrench (the force the
+tool should apply is ``-w_des``: ``w_des = (0, 0, -10, 0, 0, 0)`` presses down with 10 N). On an
+axis with ``K > 0`` this is a spring-damper around the reference; with ``K = 0`` it is force
+control: the offset moves at ``(w_ext + w_des) / D`` until the contact balances ``w_des``.
+
+Damping: ``D = 2 zeta sqrt(K M)`` (critical for zeta = 1) on stiff axes; force-controlled axes use
+the damping of a reference stiffness ``K_force_ref`` so that the force loop through the stiff joint
+servos (Cartesian stiffness ~1e4 N/m) stays well inside one control period:
+``D dt > k_servo dt^2`` holds for D = 2 sqrt(2e4 * 4) ~ 570 N s/m at dt = 10 ms.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vgs.config import ControllerConfig
+
+K_FORCE_REF = np.array([2.0e4, 2.0e4, 2.0e4, 40.0, 40.0, 40.0])
+
+
+class Admittance:
+    """Integrates the compliant offset of the commanded pose.
+
+    Args:
+        cfg: Controller configuration (stiffness, virtual mass, damping ratio, speed limits).
+    """
+
+    def __init__(self, cfg: ControllerConfig) -> None:
+        self.cfg = cfg
+        self.mass = np.array([cfg.trans_mass] * 3 + [cfg.rot_inertia] * 3)
+        self.offset = np.zeros(6)
+        self.velocity = np.zeros(6)
+        self.wrench_des = np.zeros(6)
+        self.set_stiffness(np.array([cfg.trans_stiffness] * 3 + [cfg.rot_stiffness] * 3))
+
+    def set_stiffness(self, stiffness: np.ndarray) -> None:
+        """Set K per axis (0 = force control on that axis) and derive D from it."""
+        stiffness = np.asarray(stiffness, dtype=float)
+        if stiffness.shape != (6,) or np.any(stiffness < 0):
+            raise ValueError("stiffness needs six values >= 0")
+        self.stiffness = stiffness
+        k_eff = np.where(stiffness > 0, stiffness, K_FORCE_REF)
+        self.damping = 2.0 * self.cfg.damping_ratio * np.sqrt(k_eff * self.mass)
+        # The force axes need the servo-loop damping even if K is small.
+        self.damping = np.maximum(self.damping, 2.0 * np.sqrt(K_FORCE_REF * self.mass) *
+                                  (stiffness == 0))
+
+    def reset(self) -> None:
+        self.offset[:] = 0.0
+        self.velocity[:] = 0.0
+        self.wrench_des[:] = 0.0
+
+    def step(self, wrench_ext: np.ndarray, dt: float) -> np.ndarray:
+        """Advance the offset by ``dt`` (semi-implicit Euler, damping implicit) and return it."""
+        force = wrench_ext + self.wrench_des - self.stiffness * self.offset
+        # (M + D dt) v_new = M v + force dt: unconditionally stable in the damping term.
+        self.velocity = (self.mass * self.velocity + force * dt) / (self.mass + self.damping * dt)
+        vmax = np.array([self.cfg.max_speed] * 3 + [self.cfg.max_angular_speed] * 3)
+        np.clip(self.velocity, -vmax, vmax, out=self.velocity)
+        self.offset += self.velocity * dt
+        return self.offset

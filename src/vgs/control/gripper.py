@@ -1,0 +1,38 @@
+"""RG2 command interface: opening targets ramped at the RG2's finger speed, force-limited servos.
+
+The width reading is the finger joints' opening (the RG2 reports its finger width the same way).
+"""
+
+from __future__ import annotations
+
+from vgs.config import GripperConfig
+from vgs.sim.cell import Cell
+
+
+class Gripper:
+    """Open/close the RG2.
+
+    Args:
+        cell: The simulated cell.
+        cfg: Gripper configuration.
+    """
+
+    def __init__(self, cell: Cell, cfg: GripperConfig) -> None:
+        self.cell = cell
+        self.cfg = cfg
+        self.target = cfg.stroke / 2  # per-finger opening target [m]
+
+    def command(self, width: float) -> None:
+        """Set the target opening between the pads [m] (0 = closed, stroke = open)."""
+        self.target = min(max(width / 2, 0.0), self.cfg.stroke / 2)
+
+    def update(self, dt: float) -> None:
+        """Ramp each finger's servo target toward the opening target at the closing speed."""
+        d, ids = self.cell.data, self.cell.ids
+        step = self.cfg.closing_speed / 2 * dt
+        for a in ids.finger_act:
+            d.ctrl[a] += min(max(self.target - d.ctrl[a], -step), step)
+
+    def width(self) -> float:
+        """Finger width reading [m]."""
+        return self.cell.finger_opening()

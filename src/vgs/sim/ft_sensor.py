@@ -1,0 +1,55 @@
+"""Wrist force/torque sensor model: MuJoCo's interaction wrench, noise, low-pass filter, tare.
+
+MuJoCo's ``force``/``torque`` sensors at the site ``ft`` give the wrench the flange exerts on the
+tool side, in the sensor frame. The external wrench acting on the tool (contacts) then follows
+from Newton's law once the static tool load is tared: ``w_ext ~ -(w_raw - w_tare)``. Only the
+tare at one nominal pose is removed; gravity and inertial loads that change with the wrist's
+attitude stay in the signal, as on a real sensor.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from vgs.config import FTSensorConfig
+
+
+class FTSensor:
+    """Noisy, filtered, tared wrist F/T sensor.
+
+    Args:
+        cfg: Sensor noise and filter settings.
+        dt: Sample period [s] (the controller period).
+        rng: Random generator for the noise.
+    """
+
+    def __init__(self, cfg: FTSensorConfig, dt: float, rng: np.random.Generator) -> None:
+        if dt <= 0:
+            raise ValueError("dt must be > 0")
+        self.cfg = cfg
+        self.rng = rng
+        self.alpha = 1.0 if cfg.cutoff_hz <= 0 else 1.0 - math.exp(-2 * math.pi * cfg.cutoff_hz * dt)
+        self.sigma = np.array([cfg.force_noise] * 3 + [cfg.torque_noise] * 3)
+        self.filtered: np.ndarray | None = None
+        self.tare_offset = np.zeros(6)
+
+    def sample(self, raw: np.ndarray) -> np.ndarray:
+        """Feed one raw reading ``(fx, fy, fz, tx, ty, tz)`` and return the tared external wrench
+        in the sensor frame."""
+        noisy = raw + self.sigma * self.rng.standard_normal(6)
+        if self.filtered is None:
+            self.filtered = noisy.copy()
+        else:
+            self.filtered += self.alpha * (noisy - self.filtered)
+        return -(self.filtered - self.tare_offset)
+
+    def tare(self) -> None:
+        """Zero the sensor at the current (filtered) reading."""
+        if self.filtered is not None:
+            self.tare_offset = self.filtered.copy()
+
+    def raw_filtered(self) -> np.ndarray:
+        """The filtered reading before taring (the wrench the flange exerts on the tool)."""
+        return np.zeros(6) if self.filtered is None else self.filtered.copy()
