@@ -1,0 +1,315 @@
+"""The ``vgs`` command: ``demo``, ``sweep``, ``export-scene`` and ``model-info``.
+
+Every command takes ``--profile`` and configuration overrides (``--peg-mass`` ... and the generic
+``--set key=value`` with a dotted path into :class:`vgs.config.ExperimentConfig`). Bad input,
+whether argparse rejects it or a :class:`vgs.errors.VGSError` is raised, ends with one line
+``vgs: error: <field>: <message>`` on stderr and exit code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import ast
+import json
+import math
+import os
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, NoReturn
+
+from vgs.config import ExperimentConfig, PegConfig, override, profile
+from vgs.errors import ConfigError, VGSError
+
+# Flag -> dotted configuration path. Values are SI (m, kg, N).
+OVERRIDE_FLAGS: dict[str, str] = {
+    "peg_mass": "cell.peg.mass",
+    "peg_length": "cell.peg.length",
+    "peg_diameter": "cell.peg.diameter",
+    "clearance": "cell.hole.clearance",
+    "hole_depth": "cell.hole.depth",
+    "gripper_force": "cell.gripper.force",
+}
+
+
+class UsageError(VGSError):
+    """Command-line input that argparse rejects."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """An argument parser that raises instead of printing usage and exiting."""
+
+    def error(self, message: str) -> NoReturn:
+        raise UsageError(message)
+
+
+# -- configuration from the command line -----------------------------------------------------
+
+
+def parse_value(text: str) -> Any:
+    """A Python literal if ``text`` is one, else the text itself."""
+    try:
+        return ast.literal_eval(text)
+    except (ValueError, SyntaxError):
+        return text
+
+
+def apply_override(cfg: ExperimentConfig, path: str, value: Any) -> ExperimentConfig:
+    """``override(cfg, path, value)`` with every bad value reported as a ConfigError."""
+    try:
+        return override(cfg, path, value)
+    except ConfigError:
+        raise
+    except (TypeError, ValueError) as exc:
+        raise ConfigError(path, f"invalid value {value!r} ({exc})") from exc
+
+
+def check_hole_fits(cfg: ExperimentConfig) -> None:
+    """The hole (made for the nominal peg plus the clearance) must be wider than the peg, and
+    deeper than the insertion depth K.
+
+    Raises:
+        ConfigError: ``hole.clearance`` or ``hole.depth`` otherwise.
+    """
+    hole, peg = cfg.cell.hole, cfg.cell.peg
+    depth_k = cfg.assembly.insertion_depth
+    if hole.depth <= depth_k:
+        raise ConfigError("hole.depth", f"{hole.depth * 1000:g} mm must exceed the insertion "
+                                        f"depth K = {depth_k * 1000:g} mm")
+    if hole.diameter <= peg.diameter:
+        raise ConfigError(
+            "hole.clearance",
+            f"the hole ({hole.diameter * 1000:g} mm = {hole.peg_diameter * 1000:g} mm + "
+            f"{hole.clearance * 1000:g} mm clearance) must be wider than the peg "
+            f"({peg.diameter * 1000:g} mm)",
+        )
+
+
+def config_from_args(args: argparse.Namespace) -> ExperimentConfig:
+    """The profile with the override flags and ``--set`` pairs applied, checked."""
+    cfg = profile(args.profile)
+    # The hole is made for the nominal peg: --peg-diameter changes the peg, not the hole.
+    cfg = apply_override(cfg, "cell.hole.peg_diameter", PegConfig().diameter)
+    for flag, path in OVERRIDE_FLAGS.items():
+        value = getattr(args, flag)
+        if value is not None:
+            cfg = apply_override(cfg, path, value)
+    for pair in args.set:
+        key, sep, text = pair.partition("=")
+        if not sep or not key.strip():
+            raise ConfigError("set", f"expected key=value, got {pair!r}")
+        cfg = apply_override(cfg, key.strip(), parse_value(text.strip()))
+    check_hole_fits(cfg)
+    return cfg
+
+
+def _json_safe(value: Any) -> Any:
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_safe(v) for v in value]
+    return value
+
+
+def _float_list_mm(text: str) -> tuple[float, ...]:
+    """Comma-separated millimetres -> metres."""
+    try:
+        values = tuple(float(v) / 1000.0 for v in text.split(",") if v.strip())
+    except ValueError as exc:
+        raise ConfigError("offsets", f"expected comma-separated numbers in mm, got {text!r}") \
+            from exc
+    if not values:
+        raise ConfigError("offsets", "no offsets given")
+    return values
+
+
+# -- commands -----------------------------------------------------------------------------------
+
+
+def cmd_demo(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
+    """One traced episode: phase table (or JSON record) and DIR/demo.png."""
+    from vgs.experiments.demo import format_report, run_demo
+    from vgs.experiments.plots import demo_figure
+
+    seed = cfg.seed if args.seed is None else args.seed
+    result = run_demo(cfg, seed, args.offset / 1000.0)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    figure = demo_figure(result, out / "demo.png")
+    if args.json:
+        print(json.dumps(_json_safe(result.record.to_row())))
+    else:
+        print(format_report(result.record))
+        print(f"\nfigure          {figure}")
+    return 0
+
+
+def cmd_sweep(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
+    """Grasp-offset sweep: DIR/sweep.csv, DIR/sweep.png and DIR/summary.json."""
+    from vgs.experiments.plots import sweep_figure
+    from vgs.experiments.sweep import (
+        SweepSpec,
+        default_offsets,
+        run_sweep,
+        summarize,
+        write_csv,
+    )
+
+    if args.offsets_mm is not None:
+        offsets = _float_list_mm(args.offsets_mm)
+    else:
+        offsets = default_offsets(cfg.cell.peg, args.offsets, args.length_range)
+    spec = SweepSpec(offsets=offsets, trials=args.trials, mass_range=args.mass_range,
+                     length_range=args.length_range,
+                     seed=cfg.seed if args.seed is None else args.seed)
+    out = Path(args.out)
+    rows = run_sweep(cfg, spec, workers=args.workers)
+    out.mkdir(parents=True, exist_ok=True)
+    write_csv(rows, out / "sweep.csv")
+    ranges = (f"mass +-{100 * spec.mass_range:g} %, length +-{100 * spec.length_range:g} %"
+              if spec.mass_range or spec.length_range else "nominal peg")
+    sweep_figure(rows, cfg, out / "sweep.png",
+                 title=f"{len(rows)} episodes, {spec.trials} per offset, {ranges}")
+    summary = summarize(rows)
+    doc = {"profile": cfg.name, "seed": spec.seed, "trials": spec.trials,
+           "mass_range": spec.mass_range, "length_range": spec.length_range,
+           "offsets": summary}
+    (out / "summary.json").write_text(json.dumps(_json_safe(doc), indent=2) + "\n")
+    print(f"{'offset [mm]':>11}  {'n':>3}  {'success':>7}  {'mean [s]':>8}  {'std [s]':>7}  "
+          f"{'min [s]':>7}  {'max [s]':>7}")
+    for s in summary:
+        cells = [s[k] for k in ("time_mean_s", "time_std_s", "time_min_s", "time_max_s")]
+        times = "  ".join(f"{'-':>8}" if v is None else f"{v:8.2f}" for v in cells)
+        print(f"{s['offset_mm']:11.1f}  {s['n']:3d}  {100 * s['success_rate']:6.0f}%  {times}")
+    print(f"\nwrote {out / 'sweep.csv'}, {out / 'sweep.png'}, {out / 'summary.json'}")
+    return 0
+
+
+def cmd_export_scene(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
+    """Write the compiled cell as MJCF and check that MuJoCo loads it."""
+    from vgs.experiments.scene import export_scene
+
+    info = export_scene(cfg, args.out, seed=args.seed)
+    print(f"wrote {info.path} ({info.nbody} bodies, {info.ngeom} geoms, {info.nmesh} meshes, "
+          f"{info.nu} actuators; keyframe 'home'); view it with: "
+          f"python -m mujoco.viewer --mjcf {info.path}")
+    return 0
+
+
+def cmd_model_info(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
+    """Parameter counts and tensor shapes of the grasp network."""
+    from vgs.grasping.network import format_model_info, model_info
+
+    if args.backbone is not None:
+        cfg = apply_override(cfg, "network.backbone", args.backbone)
+    if args.rotations is not None:
+        cfg = apply_override(cfg, "network.num_rotations", args.rotations)
+    info = model_info(cfg.network, rotate=args.rotate, size=args.size)
+    print(json.dumps(info, indent=2) if args.json else format_model_info(info))
+    return 0
+
+
+# -- parser -------------------------------------------------------------------------------------
+
+
+def _common() -> argparse.ArgumentParser:
+    common = _Parser(add_help=False)
+    common.add_argument("--profile", default="paper",
+                        help="configuration profile: smoke, quick or paper (default: paper; "
+                             "the cell is the same in all profiles)")
+    group = common.add_argument_group("configuration overrides (SI units)")
+    group.add_argument("--peg-mass", type=float, help="peg mass [kg] (cell.peg.mass)")
+    group.add_argument("--peg-length", type=float, help="peg length [m] (cell.peg.length)")
+    group.add_argument("--peg-diameter", type=float,
+                       help="peg diameter [m] (cell.peg.diameter); the hole stays made for the "
+                            "nominal 30 mm peg")
+    group.add_argument("--clearance", type=float,
+                       help="diametral clearance [m] (cell.hole.clearance)")
+    group.add_argument("--hole-depth", type=float, help="hole depth [m] (cell.hole.depth)")
+    group.add_argument("--gripper-force", type=float,
+                       help="RG2 gripping force, 3-40 N (cell.gripper.force)")
+    group.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                       help="any field by dotted path, e.g. --set assembly.press_force=12 "
+                            "(repeatable; the value is a Python literal or a string)")
+    return common
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``vgs`` argument parser with its four subcommands."""
+    common = _common()
+    parser = _Parser(prog="vgs", description="Visual grasping strategy for peg-in-hole "
+                                             "assembly (UR5 + RG2 in MuJoCo).")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    demo = sub.add_parser("demo", parents=[common], help="one whole episode with a figure")
+    demo.add_argument("--seed", type=int, help="episode seed (default: the profile's seed)")
+    demo.add_argument("--json", action="store_true",
+                      help="print only the episode record as JSON on stdout")
+    demo.add_argument("--out", default="runs/demo",
+                      help="folder of demo.png (default: %(default)s)")
+    demo.add_argument("--offset", type=float, default=0.0, metavar="MM",
+                      help="grasp offset from the visible peg centre along its axis [mm] "
+                           "(default: 0, the centre heuristic)")
+    demo.set_defaults(func=cmd_demo)
+
+    sweep = sub.add_parser("sweep", parents=[common],
+                           help="assembly time against the grasp offset")
+    sweep.add_argument("--offsets", type=int, default=9,
+                       help="number of offsets over +-(L/2 - 15 mm) (default: %(default)s)")
+    sweep.add_argument("--offsets-mm", metavar="A,B,...",
+                       help="explicit offsets [mm], comma-separated (overrides --offsets); write "
+                            "--offsets-mm=-20,0,20 when the first is negative")
+    sweep.add_argument("--trials", type=int, default=20, help="trials per offset")
+    sweep.add_argument("--out", default="runs/sweep", help="output folder (default: %(default)s)")
+    sweep.add_argument("--mass-range", type=float, default=0.0,
+                       help="peg mass factor uniform in 1 +- this (default: 0)")
+    sweep.add_argument("--length-range", type=float, default=0.0,
+                       help="peg length factor uniform in 1 +- this; the mass follows the "
+                            "volume (default: 0)")
+    sweep.add_argument("--seed", type=int, help="root seed (default: the profile's seed)")
+    sweep.add_argument("--workers", type=int,
+                       help="worker processes (default: the number of CPU cores)")
+    sweep.set_defaults(func=cmd_sweep)
+
+    scene = sub.add_parser("export-scene", parents=[common],
+                           help="write the cell as MJCF for MuJoCo's viewer")
+    scene.add_argument("--out", default="scene.xml", help="MJCF file (default: %(default)s)")
+    scene.add_argument("--seed", type=int, default=0,
+                       help="reset seed stored as the 'home' keyframe (default: 0)")
+    scene.set_defaults(func=cmd_export_scene)
+
+    info = sub.add_parser("model-info", parents=[common],
+                          help="parameter counts and tensor shapes of the grasp network")
+    info.add_argument("--backbone", help="densenet121 or light (default: the profile's)")
+    info.add_argument("--rotations", type=int, help="number of grasp rotations R")
+    info.add_argument("--rotate", default="input", help="input or features (default: input)")
+    info.add_argument("--size", type=int, default=224, help="heightmap side [px]")
+    info.add_argument("--json", action="store_true", help="print JSON")
+    info.set_defaults(func=cmd_model_info)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ``vgs`` command; return its exit code.
+
+    Args:
+        argv: Arguments without the program name (default: ``sys.argv[1:]``).
+    """
+    try:
+        args = build_parser().parse_args(argv)
+        cfg = config_from_args(args)
+        return args.func(args, cfg)
+    except VGSError as exc:
+        message = " ".join(str(exc).split())
+        print(f"vgs: error: {message}", file=sys.stderr)
+        return 2
+    except BrokenPipeError:
+        # The reader of stdout went away (e.g. `vgs model-info | head`): stop quietly.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
