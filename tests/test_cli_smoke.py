@@ -1,0 +1,96 @@
+"""Every ``vgs`` command in a subprocess, and bad input ending in one line and exit code 2."""
+
+from __future__ import annotations
+
+import csv
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import mujoco
+import pytest
+
+from vgs.experiments.sweep import COLUMNS
+
+VGS = str(Path(sys.executable).with_name("vgs"))
+
+
+def vgs(*argv: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([VGS, *argv], cwd=cwd, capture_output=True, text=True, timeout=300)
+
+
+@pytest.mark.slow
+def test_demo_json(tmp_path: Path) -> None:
+    out = tmp_path / "demo"
+    proc = vgs("demo", "--seed", "2", "--json", "--profile", "smoke", "--out", str(out),
+               cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.strip().splitlines()
+    assert len(lines) == 1
+    row = json.loads(lines[0])
+    assert row["seed"] == 2 and "time_search_s" in row and "grasp_offset_mm" in row
+    assert (out / "demo.png").stat().st_size > 10_000
+
+
+@pytest.mark.slow
+def test_demo_table(tmp_path: Path) -> None:
+    proc = vgs("demo", "--seed", "2", "--offset", "10", "--out", str(tmp_path), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    for phase in ("transport", "approach", "search", "slide", "align", "insert"):
+        assert phase in proc.stdout
+    assert "assembly time" in proc.stdout and "adjustments" in proc.stdout
+
+
+@pytest.mark.slow
+def test_sweep(tmp_path: Path) -> None:
+    out = tmp_path / "sweep"
+    proc = vgs("sweep", "--offsets-mm", "0,20", "--trials", "1", "--workers", "1", "--out",
+               str(out), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    with (out / "sweep.csv").open() as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == 2 and tuple(rows[0]) == COLUMNS
+    assert [float(r["offset_mm"]) for r in rows] == [0.0, 20.0]
+    summary = json.loads((out / "summary.json").read_text())
+    assert [s["n"] for s in summary["offsets"]] == [1, 1]
+    assert (out / "sweep.png").stat().st_size > 10_000
+
+
+def test_export_scene(tmp_path: Path) -> None:
+    proc = vgs("export-scene", "--out", "scene.xml", "--peg-mass", "0.6", "--peg-length",
+               "0.11", "--clearance", "0.0008", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    model = mujoco.MjModel.from_xml_path(str(tmp_path / "scene.xml"))
+    peg = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "peg")
+    assert model.body_mass[peg] == pytest.approx(0.6)
+
+
+def test_model_info(tmp_path: Path) -> None:
+    proc = vgs("model-info", "--backbone", "light", "--json", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    info = json.loads(proc.stdout)
+    assert info["backbone"] == "light" and info["parameters"]["total"] > 0
+
+
+@pytest.mark.parametrize(
+    ("argv", "field"),
+    [
+        (("demo", "--peg-mass", "-1"), "peg.mass"),
+        (("demo", "--clearance", "0"), "hole.clearance"),
+        (("demo", "--peg-diameter", "0.0315", "--clearance", "0.001"), "hole.clearance"),
+        (("demo", "--offset", "45"), "offset"),
+        (("sweep", "--offsets-mm", "0,60", "--trials", "1"), "offsets"),
+        (("sweep", "--profile", "nope"), "profile"),
+        (("export-scene", "--set", "cell.hole.segments=4"), "hole.segments"),
+        (("export-scene", "--peg-mass", "abc"), "argument --peg-mass"),
+        (("frobnicate",), "argument COMMAND"),
+    ],
+)
+def test_bad_input_one_line_exit_2(tmp_path: Path, argv: tuple[str, ...], field: str) -> None:
+    proc = vgs(*argv, cwd=tmp_path)
+    assert proc.returncode == 2
+    assert proc.stdout == ""
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 1, proc.stderr
+    assert lines[0].startswith(f"vgs: error: {field}: ")
