@@ -128,7 +128,10 @@ class GripperConfig:
         stroke: Full opening [m].
         pad_friction: Sliding friction of the finger pads.
         pad_torsional_friction: Torsional friction of the pads [m] (MuJoCo's second friction
-            coefficient: the torque limit is this times the normal force).
+            coefficient: the torque limit is this times the normal force). A cylinder pressed
+            on a flat pad touches along a line of the pad's length L = 22 mm; with uniform
+            pressure, turning it about the line's midpoint takes mu F L / 4, so the
+            coefficient is mu L / 4 = 5.5 mm for mu = 1.
         pad_rolling_friction: Rolling friction of the pads [m].
         closing_speed: Finger closing speed [m/s] (RG2: about 0.11 m/s full stroke in 1 s).
     """
@@ -136,7 +139,7 @@ class GripperConfig:
     force: float = 40.0
     stroke: float = 0.110
     pad_friction: float = 1.0
-    pad_torsional_friction: float = 0.004
+    pad_torsional_friction: float = 0.0055
     pad_rolling_friction: float = 0.0005
     closing_speed: float = 0.11
 
@@ -268,6 +271,8 @@ class ControllerConfig:
         joint_kp: Joint servo stiffness [N m/rad] of the UR5 position loop (MuJoCo position
             actuators; implicit damping keeps them stable at the physics time step).
         joint_kv: Joint servo damping [N m s/rad].
+        force_damping: Damping D of force-controlled axes (K = 0) [N s/m]: a force error of
+            10 N moves the TCP at 10 / D m/s.
         max_speed: Largest commanded TCP speed [m/s].
         max_angular_speed: Largest commanded TCP angular speed [rad/s].
     """
@@ -279,13 +284,15 @@ class ControllerConfig:
     damping_ratio: float = 1.0
     joint_kp: tuple[float, ...] = (6000.0, 6000.0, 4000.0, 1500.0, 1500.0, 1500.0)
     joint_kv: tuple[float, ...] = (300.0, 300.0, 200.0, 40.0, 40.0, 40.0)
+    force_damping: float = 1500.0
     max_speed: float = 0.25
     max_angular_speed: float = 1.5
 
     def __post_init__(self) -> None:
         _positive(
             self, "trans_stiffness", "rot_stiffness", "trans_mass", "rot_inertia",
-            "damping_ratio", "max_speed", "max_angular_speed", prefix="controller.",
+            "damping_ratio", "force_damping", "max_speed", "max_angular_speed",
+            prefix="controller.",
         )
         if len(self.joint_kp) != 6 or len(self.joint_kv) != 6:
             raise ConfigError("controller.joint_kp", "needs six values, one per UR5 joint")
@@ -306,6 +313,8 @@ class AssemblyConfig:
             hole's clearance plus the peg radius times the search tilt's sine is not needed: a
             pitch of a few millimetres makes the leading rim point sweep every point.
         spiral_speed: Tangential speed of the spiral [m/s].
+        search_radius: Largest spiral radius [m]; the spiral starts again from its centre
+            beyond it (the hole lies within its own radius of the nominal position).
         drop_threshold: Drop of the TCP below the plane-contact height that declares two-point
             contact [m].
         slide_speed: Speed of the sliding phase [m/s].
@@ -324,7 +333,8 @@ class AssemblyConfig:
     search_tilt_deg: float = 6.0
     spiral_pitch: float = 0.004
     spiral_speed: float = 0.01
-    drop_threshold: float = 0.0015
+    search_radius: float = 0.02
+    drop_threshold: float = 0.001
     slide_speed: float = 0.004
     three_point_force: float = 3.0
     wiggle_amplitude_deg: float = 1.0
@@ -333,7 +343,7 @@ class AssemblyConfig:
     insert_speed: float = 0.01
     timeouts: tuple[tuple[str, float], ...] = (
         ("transport", 20.0),
-        ("approach", 10.0),
+        ("approach", 20.0),
         ("search", 120.0),
         ("slide", 30.0),
         ("align", 60.0),
@@ -343,7 +353,7 @@ class AssemblyConfig:
     def __post_init__(self) -> None:
         _positive(
             self, "insertion_depth", "approach_height", "contact_force", "press_force",
-            "spiral_pitch", "spiral_speed", "drop_threshold", "slide_speed", "three_point_force",
+            "spiral_pitch", "spiral_speed", "search_radius", "drop_threshold", "slide_speed", "three_point_force",
             "wiggle_period", "insert_speed", prefix="assembly.",
         )
         _non_negative(self, "search_tilt_deg", "wiggle_amplitude_deg", "align_gain",

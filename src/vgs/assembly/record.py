@@ -26,6 +26,8 @@ class EpisodeRecord:
         assembly_time: Simulated seconds from the end of the grasp to the end of insertion.
         phase_times: Simulated seconds spent in each phase of :data:`PHASES`.
         adjustments: Number of alignment adjustments (wiggle iterations, paper Section 2.2).
+        retries: New searches after a wrong contact-state decision (lost alignment or a stalled
+            insertion).
         hole_offset_mm: Ground truth displacement of the hole from its nominal position [mm].
         final_tilt_deg: Ground truth tilt of the peg axis from vertical at the end [deg].
         insertion_depth_mm: Ground truth depth of the peg's lower end below the entrance [mm].
@@ -41,6 +43,7 @@ class EpisodeRecord:
     assembly_time: float = math.nan
     phase_times: dict[str, float] = field(default_factory=lambda: {p: 0.0 for p in PHASES})
     adjustments: int = 0
+    retries: int = 0
     hole_offset_mm: float = math.nan
     final_tilt_deg: float = math.nan
     insertion_depth_mm: float = math.nan

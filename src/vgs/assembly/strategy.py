@@ -51,6 +51,16 @@ from vgs.errors import SimulationError
 GRAVITY = 9.81
 ENTRY_DEPTH = 0.004  # descent below the three-point height that means "entered the hole" [m]
 SETTLE_TIME = 0.3  # still time before taring [s]
+ALIGNED_MOMENT = 0.3  # contact moment below which the peg bears on no wall [N m]
+Z_FILTER_TIME = 0.1  # time constant of the TCP-height filter in the search [s]
+MAX_RETRIES = 3  # new searches after a wrong contact-state decision
+MAX_ALIGN_ADJUSTMENTS = 15  # adjustments in one alignment before it is judged lost
+MAX_INSERT_STALLS = 4  # consecutive stalled wiggles before the insertion is judged lost
+DROP_WINDOW = 3.0  # the drop is measured against the highest TCP height of this window [s]
+
+
+class Recovery(Exception):
+    """The contact state the controller believed in was wrong: lift and search again."""
 
 
 class PhaseTimeout(Exception):
@@ -93,6 +103,7 @@ class AssemblyModule:
         self.surface_z = hole_surface_z
         self.delta = math.atan(clearance / cfg.insertion_depth)  # paper eq. 1
         self.adjustments = 0
+        self.retries = 0
         self.phase_start = 0.0
         self.phase_times: dict[str, float] = {}
         self.estimate: PegEstimate | None = None
@@ -104,10 +115,12 @@ class AssemblyModule:
         self.phase_start = self.robot.time
 
     def _end(self, phase: str) -> None:
-        self.phase_times[phase] = self.robot.time - self.phase_start
+        self.phase_times[phase] = (self.phase_times.get(phase, 0.0) + self.robot.time
+                                   - self.phase_start)
 
     def _check_timeout(self, phase: str) -> None:
-        if self.robot.time - self.phase_start > self.cfg.timeout(phase):
+        spent = self.phase_times.get(phase, 0.0) + self.robot.time - self.phase_start
+        if spent > self.cfg.timeout(phase):
             raise PhaseTimeout(phase)
 
     # -- the whole module --------------------------------------------------------------------
@@ -115,18 +128,31 @@ class AssemblyModule:
     def run(self, record: EpisodeRecord) -> None:
         """Run all phases, filling ``record`` (times, adjustments, failure reason)."""
         start = self.robot.time
+        sequence = (
+            ("transport", self.transport),
+            ("approach", self.approach),
+            ("search", self.search),
+            ("slide", self.slide),
+            ("align", self.align),
+            ("insert", self.insert),
+        )
         try:
-            for phase, method in (
-                ("transport", self.transport),
-                ("approach", self.approach),
-                ("search", self.search),
-                ("slide", self.slide),
-                ("align", self.align),
-                ("insert", self.insert),
-            ):
+            k = 0
+            while k < len(sequence):
+                phase, method = sequence[k]
                 self._begin(phase)
-                method()
+                try:
+                    method()
+                except Recovery:
+                    # Back to the approach: lift, stand the peg upright, search again here.
+                    self._end(phase)
+                    self.retries += 1
+                    if self.retries > MAX_RETRIES:
+                        raise PhaseTimeout(phase) from None
+                    k = 1
+                    continue
                 self._end(phase)
+                k += 1
             record.success = True
         except PhaseTimeout as exc:
             self._end(exc.phase)
@@ -136,6 +162,7 @@ class AssemblyModule:
         record.assembly_time = self.robot.time - start
         record.phase_times.update(self.phase_times)
         record.adjustments = self.adjustments
+        record.retries = self.retries
         self.release()
 
     # -- phases -------------------------------------------------------------------------------
@@ -191,7 +218,17 @@ class AssemblyModule:
 
     def approach(self) -> None:
         robot, cfg, est = self.robot, self.cfg, self.estimate
-        robot.ft.tare()  # once, at the nominal upright pose
+        robot.arm.set_compliant(False)
+        if self.retries == 0:
+            robot.ft.tare()  # once, at the nominal upright pose
+            target_xy = self.hole_xy
+        else:
+            # Recovery: lift, stand the peg upright about its lower end, search around here.
+            target_xy = (self._tip() + self._lowest_rim_offset(robot.arm.R_ref))[:2]
+            p = robot.arm.p_ref + np.array([0.0, 0.0, 0.012])
+            robot.move_to(p, robot.arm.R_ref, speed=0.02, settle=0.0)
+            robot.move_to(robot.arm.p_ref, self.R_asm, speed=0.02, angular_speed=0.3,
+                          settle=0.0)
         p, R = robot.arm.p_ref.copy(), robot.arm.R_ref.copy()
         # Tilt about the pinch axis (tool y) around the estimated lower end.
         axis = R[:, 1]
@@ -201,17 +238,16 @@ class AssemblyModule:
         tip = p + est.hanging * est.down_sign * R[:, 0]
         R_tilt = Rt @ R
         p_tilt = tip + Rt @ (p - tip)
-        # Place the lowest rim point above the nominal hole centre, approach_height above it.
+        # Place the lowest rim point above the target, approach_height above the surface.
         low = tip + self._lowest_rim_offset(R_tilt)
-        shift = np.array([*(self.hole_xy - low[:2]),
+        shift = np.array([*(target_xy - low[:2]),
                           self.surface_z + cfg.approach_height - low[2]])
         robot.move_to(p_tilt + shift, R_tilt, speed=0.05, angular_speed=0.5, settle=SETTLE_TIME)
         self.low_rim_from_tcp = (low + shift) - (p_tilt + shift)
         robot.arm.set_compliant(True)
-        robot.arm.admittance.set_stiffness(np.array(
-            [2000.0, 2000.0, 0.0, self.robot.cfg.rot_stiffness * 10, self.robot.cfg.rot_stiffness
-             * 10, self.robot.cfg.rot_stiffness * 10]))
-        robot.arm.admittance.wrench_des[:] = [0.0, 0.0, -cfg.contact_force * 2, 0, 0, 0]
+        adm = robot.arm.admittance
+        adm.set_stiffness(np.array([2000.0, 2000.0, 0.0, *[robot.cfg.rot_stiffness * 10] * 3]))
+        adm.wrench_des[:] = [0.0, 0.0, -cfg.press_force, 0, 0, 0]
         while robot.arm.wrench[2] < cfg.contact_force:
             robot.run(robot.dt)
             self._check_timeout("approach")
@@ -226,18 +262,30 @@ class AssemblyModule:
         center = robot.arm.p_ref[:2].copy()
         theta = 0.0
         b = cfg.spiral_pitch / (2 * math.pi)
-        z_ref = self.z_contact
+        window: list[float] = []
+        n_window = max(1, int(round(DROP_WINDOW / robot.dt)))
+        alpha = robot.dt / (Z_FILTER_TIME + robot.dt)
+        z_f = float(robot.cell.data.site_xpos[robot.cell.ids.tcp_site][2])
+        settle_ticks = int(round(SETTLE_TIME / robot.dt))
         while True:
             r = b * theta
+            if r > cfg.search_radius:
+                theta, r = 0.0, 0.0  # start the spiral again from its centre
             # d(theta)/dt = v / sqrt(r^2 + b^2): constant tangential speed on the spiral.
             theta += cfg.spiral_speed * robot.dt / math.hypot(r, b * 2)
             p_ref = robot.arm.p_ref.copy()
             p_ref[:2] = center + r * np.array([math.cos(theta), math.sin(theta)])
             robot.arm.set_reference(p_ref, robot.arm.R_ref)
             robot.tick()
-            z = robot.arm.tcp_pose()[0][2]
-            z_ref = max(z_ref, z) if r < 1e-3 else z_ref
-            if z < z_ref - cfg.drop_threshold:
+            # Low-pass filtered TCP height: the rubbing spiral's stick-slip makes it chatter.
+            z_f += alpha * (float(robot.cell.data.site_xpos[robot.cell.ids.tcp_site][2]) - z_f)
+            window.append(z_f)
+            if len(window) > n_window:
+                window.pop(0)
+            settle_ticks -= 1
+            # A drop below the recent height: the leading rim fell over the hole edge.
+            if settle_ticks < 0 and z_f < max(window) - cfg.drop_threshold:
+                self.z_search = max(window)
                 break
             self._check_timeout("search")
 
@@ -259,6 +307,8 @@ class AssemblyModule:
             last = now
             self._check_timeout("slide")
         self.z_three = robot.arm.tcp_pose()[0][2]
+        if self.z_three > self.z_search - self.cfg.drop_threshold:
+            raise Recovery  # the peg is back on the surface: the drop was not the hole
 
     def align(self) -> None:
         robot, cfg = self.robot, self.cfg
@@ -269,7 +319,10 @@ class AssemblyModule:
         # Rotational compliance about the pinch axis during alignment.
         adm.set_stiffness(np.array([0.0, 0.0, 0.0, *[self.robot.cfg.rot_stiffness] * 3]))
         n_wiggle = max(2, int(round(cfg.wiggle_period / robot.dt)))
+        start_adjustments = self.adjustments
         while True:
+            if self.adjustments - start_adjustments >= MAX_ALIGN_ADJUSTMENTS:
+                raise Recovery
             robot.arm.absorb_offset()
             tilt = self._commanded_tilt()
             moment = float(np.dot(robot.arm.wrench[3:], axis))
@@ -284,8 +337,9 @@ class AssemblyModule:
             self.adjustments += 1
             z = robot.arm.tcp_pose()[0][2]
             moment = float(np.dot(robot.arm.wrench[3:], axis))
-            if (z < self.z_three - ENTRY_DEPTH and abs(self._commanded_tilt()) < self.delta + amp
-                    and abs(moment) < 0.3):
+            # Aligned: the peg slid into the hole (which a tilt much above delta forbids) and
+            # the contact moment has relaxed.
+            if z < self.z_three - ENTRY_DEPTH and abs(moment) < ALIGNED_MOMENT:
                 return
             self._check_timeout("align")
 
@@ -312,24 +366,27 @@ class AssemblyModule:
         adm = robot.arm.admittance
         robot.arm.absorb_offset()
         adm.wrench_des[:] = [0.0, 0.0, -cfg.press_force, 0.0, 0.0, 0.0]
-        # Upright reference; compliance in the lateral axes and in rotation lets the hole guide.
-        down_now = self._down()
-        tilt = self._commanded_tilt()
-        del down_now
-        self._rotate_about_tip(-tilt, 10)
+        # Compliance in the lateral axes and in rotation lets the hole guide the peg.
         adm.set_stiffness(np.array([300.0, 300.0, 0.0, *[self.robot.cfg.rot_stiffness] * 3]))
         z_target = self.z_contact - self.cfg.insertion_depth - 0.003
         last_z = robot.arm.tcp_pose()[0][2]
         n_wiggle = max(2, int(round(cfg.wiggle_period / robot.dt)))
         amp = math.radians(cfg.wiggle_amplitude_deg)
+        stalls = 0
         while robot.arm.tcp_pose()[0][2] > z_target:
             robot.run(0.25)
             z = robot.arm.tcp_pose()[0][2]
             if last_z - z < 0.25 * cfg.insert_speed * 0.25:
-                # Stalled (jammed): one more wiggle adjustment.
+                # Stalled (jammed): one more wiggle adjustment; several in a row mean the peg
+                # is not in the hole at all (a wrong contact-state decision).
+                stalls += 1
+                if stalls > MAX_INSERT_STALLS:
+                    raise Recovery
                 for sgn in (1.0, -2.0, 1.0):
                     self._rotate_about_tip(sgn * amp, n_wiggle // 4)
                 self.adjustments += 1
+            else:
+                stalls = 0
             last_z = z
             self._check_timeout("insert")
 

@@ -10,10 +10,10 @@ tool should apply is ``-w_des``: ``w_des = (0, 0, -10, 0, 0, 0)`` presses down w
 axis with ``K > 0`` this is a spring-damper around the reference; with ``K = 0`` it is force
 control: the offset moves at ``(w_ext + w_des) / D`` until the contact balances ``w_des``.
 
-Damping: ``D = 2 zeta sqrt(K M)`` (critical for zeta = 1) on stiff axes; force-controlled axes use
-the damping of a reference stiffness ``K_force_ref`` so that the force loop through the stiff joint
-servos (Cartesian stiffness ~1e4 N/m) stays well inside one control period:
-``D dt > k_servo dt^2`` holds for D = 2 sqrt(2e4 * 4) ~ 570 N s/m at dt = 10 ms.
+Damping: ``D = 2 zeta sqrt(K M)`` (critical for zeta = 1) on stiff axes. Force-controlled axes need
+``D > k_servo dt`` for the discrete force loop through the stiff joint servos (Cartesian stiffness
+~1e4 N/m, dt = 10 ms: D > 100 N s/m); they use ``ControllerConfig.force_damping`` (default
+1500 N s/m), which also filters the stick-slip of the rubbing spiral.
 """
 
 from __future__ import annotations
@@ -48,9 +48,10 @@ class Admittance:
         self.stiffness = stiffness
         k_eff = np.where(stiffness > 0, stiffness, K_FORCE_REF)
         self.damping = 2.0 * self.cfg.damping_ratio * np.sqrt(k_eff * self.mass)
-        # The force axes need the servo-loop damping even if K is small.
-        self.damping = np.maximum(self.damping, 2.0 * np.sqrt(K_FORCE_REF * self.mass) *
-                                  (stiffness == 0))
+        # Force-controlled translation axes use the configured force damping (>= the servo-loop
+        # minimum above).
+        force_axes = (stiffness == 0) & (np.arange(6) < 3)
+        self.damping[force_axes] = np.maximum(self.damping[force_axes], self.cfg.force_damping)
 
     def reset(self) -> None:
         self.offset[:] = 0.0

@@ -8,7 +8,8 @@ Each control tick (period ``sim.timestep * sim.control_decimation``):
 3. commanded pose ``p_cmd = p_ref + e_p``, ``R_cmd = exp([e_r]_x) R_ref``;
 4. differential IK on the *commanded* joint vector (the robot's kinematic model evaluated on a
    scratch ``MjData``, independent of servo lag) with damped least squares:
-   ``q_cmd <- q_cmd + J^T (J J^T + lambda^2 I)^-1 [p_cmd - p(q_cmd); log(R_cmd R(q_cmd)^T)]``,
+   ``q_cmd <- q_cmd + (J^T J + lambda^2 I)^-1 J^T [p_cmd - p(q_cmd); log(R_cmd R(q_cmd)^T)]``
+   (two Newton steps per tick),
    ``J`` the 6x6 TCP Jacobian of the arm joints at ``q_cmd`` (MuJoCo ``mj_jacSite``), each step
    clipped to the UR5's joint speed;
 5. the UR5's joint position servos (MuJoCo position actuators with stiffness ``joint_kp`` and
@@ -56,6 +57,9 @@ class ArmController:
         self.p_ref, self.R_ref = self.tcp_pose()
         self._scratch = mujoco.MjData(cell.model)
         self.q_cmd = self.joint_positions()
+        self._J = np.zeros((6, 6))
+        self._err = np.zeros(6)
+        self._damp = DLS_LAMBDA**2 * np.eye(6)
         self.compliant = False  # False: the F/T signal does not drive the admittance
 
     def set_compliant(self, on: bool) -> None:
@@ -85,9 +89,14 @@ class ArmController:
         self.wrench_sensor = w
         R_world_ft = d.site_xmat[ids.ft_site].reshape(3, 3)
         f = R_world_ft @ w[:3]
-        tau = R_world_ft @ w[3:] + np.cross(d.site_xpos[ids.ft_site] - d.site_xpos[ids.tcp_site], f)
-        self.wrench = np.concatenate([f, tau])
-        return self.wrench
+        r = d.site_xpos[ids.ft_site] - d.site_xpos[ids.tcp_site]
+        wrench = self.wrench
+        wrench[:3] = f
+        wrench[3:] = R_world_ft @ w[3:]
+        wrench[3] += r[1] * f[2] - r[2] * f[1]
+        wrench[4] += r[2] * f[0] - r[0] * f[2]
+        wrench[5] += r[0] * f[1] - r[1] * f[0]
+        return wrench
 
     # -- commands ---------------------------------------------------------------------------
 
@@ -97,6 +106,8 @@ class ArmController:
 
     def commanded_pose(self) -> tuple[np.ndarray, np.ndarray]:
         e = self.admittance.offset
+        if not e[3:].any():
+            return self.p_ref + e[:3], self.R_ref
         return self.p_ref + e[:3], exp_so3(e[3:]) @ self.R_ref
 
     def absorb_offset(self) -> None:
@@ -112,17 +123,21 @@ class ArmController:
             self.admittance.step(self.wrench, dt)
         p_cmd, R_cmd = self.commanded_pose()
         m, ids, sd = self.cell.model, self.cell.ids, self._scratch
+        J, err = self._J, self._err
         step_max = MAX_JOINT_SPEED * dt
         for _ in range(IK_ITERATIONS):
             sd.qpos[ids.arm_qpos] = self.q_cmd
             mujoco.mj_kinematics(m, sd)
             mujoco.mj_comPos(m, sd)
             mujoco.mj_jacSite(m, sd, self._jacp, self._jacr, ids.tcp_site)
-            J = np.vstack([self._jacp[:, ids.arm_dof], self._jacr[:, ids.arm_dof]])
-            p, R = sd.site_xpos[ids.tcp_site], sd.site_xmat[ids.tcp_site].reshape(3, 3)
-            err = np.concatenate([p_cmd - p, log_so3(R_cmd @ R.T)])
-            dq = J.T @ np.linalg.solve(J @ J.T + DLS_LAMBDA**2 * np.eye(6), err)
+            J[:3] = self._jacp[:, ids.arm_dof]
+            J[3:] = self._jacr[:, ids.arm_dof]
+            err[:3] = p_cmd - sd.site_xpos[ids.tcp_site]
+            err[3:] = log_so3(R_cmd @ sd.site_xmat[ids.tcp_site].reshape(3, 3).T)
+            # Damped least squares: dq = (J^T J + lambda^2 I)^-1 J^T err.
+            dq = np.linalg.solve(J.T @ J + self._damp, J.T @ err)
             np.clip(dq, -step_max, step_max, out=dq)
-            self.q_cmd = self.q_cmd + dq
-            step_max = 0.0 if np.abs(err).max() < 1e-6 else step_max
+            self.q_cmd += dq
+            if np.abs(err).max() < 1e-7:
+                break
         self.cell.data.ctrl[ids.arm_act] = self.q_cmd
