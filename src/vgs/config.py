@@ -353,7 +353,8 @@ class AssemblyConfig:
     def __post_init__(self) -> None:
         _positive(
             self, "insertion_depth", "approach_height", "contact_force", "press_force",
-            "spiral_pitch", "spiral_speed", "search_radius", "drop_threshold", "slide_speed", "three_point_force",
+            "spiral_pitch", "spiral_speed", "search_radius", "drop_threshold", "slide_speed",
+            "three_point_force",
             "wiggle_period", "insert_speed", prefix="assembly.",
         )
         _non_negative(self, "search_tilt_deg", "wiggle_amplitude_deg", "align_gain",
@@ -393,7 +394,8 @@ class NetworkConfig:
 
     def __post_init__(self) -> None:
         if self.backbone not in BACKBONES:
-            raise ConfigError("network.backbone", f"must be one of {BACKBONES}, got {self.backbone!r}")
+            raise ConfigError("network.backbone",
+                              f"must be one of {BACKBONES}, got {self.backbone!r}")
         if self.num_rotations < 1:
             raise ConfigError("network.num_rotations", "must be >= 1")
         _positive(self, "depth_std", prefix="network.")
@@ -558,7 +560,9 @@ def profile(name: str) -> ExperimentConfig:
     try:
         return PROFILES[name]()
     except KeyError:
-        raise ConfigError("profile", f"unknown profile {name!r}; choose from {sorted(PROFILES)}")
+        raise ConfigError(
+            "profile", f"unknown profile {name!r}; choose from {sorted(PROFILES)}"
+        ) from None
 
 
 def override(cfg: Any, path: str, value: Any) -> Any:

@@ -313,7 +313,6 @@ class AssemblyModule:
     def align(self) -> None:
         robot, cfg = self.robot, self.cfg
         adm = robot.arm.admittance
-        est = self.estimate
         axis = self.tilt_axis
         amp = math.radians(cfg.wiggle_amplitude_deg)
         # Rotational compliance about the pinch axis during alignment.

@@ -16,7 +16,7 @@ def skew(v: np.ndarray) -> np.ndarray:
 
 
 def exp_so3(w: np.ndarray) -> np.ndarray:
-    """Rodrigues: ``exp([w]_x) = I + sin(t) K + (1 - cos t) K^2`` with ``t = |w|``, ``K = [w/t]_x``."""
+    """Rodrigues: ``exp([w]_x) = I + sin(t) K + (1 - cos t) K^2``, ``t = |w|``, ``K = [w/t]_x``."""
     theta = float(np.linalg.norm(w))
     if theta < 1e-12:
         return np.eye(3) + skew(w)

@@ -30,7 +30,8 @@ class FTSensor:
             raise ValueError("dt must be > 0")
         self.cfg = cfg
         self.rng = rng
-        self.alpha = 1.0 if cfg.cutoff_hz <= 0 else 1.0 - math.exp(-2 * math.pi * cfg.cutoff_hz * dt)
+        wc = 2 * math.pi * cfg.cutoff_hz
+        self.alpha = 1.0 if cfg.cutoff_hz <= 0 else 1.0 - math.exp(-wc * dt)
         self.sigma = np.array([cfg.force_noise] * 3 + [cfg.torque_noise] * 3)
         self.filtered: np.ndarray | None = None
         self.tare_offset = np.zeros(6)

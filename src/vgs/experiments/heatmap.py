@@ -1,0 +1,75 @@
+"""Q-value heat maps over the heightmap, untrained beside trained (paper Figure 7).
+
+The untrained network is the run's network at its initial parameters (same seed, no updates);
+the trained one is loaded from the run's checkpoint. Each panel shows ``max_k Q(k, i, j)`` over
+the rotations, drawn over the colour heightmap, and marks the greedy grasp on the peg.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import torch  # noqa: E402
+
+from vgs.assembly.episode import EpisodeRunner  # noqa: E402
+from vgs.config import ExperimentConfig, from_dict  # noqa: E402
+from vgs.errors import ConfigError  # noqa: E402
+from vgs.experiments.train import episode_seed  # noqa: E402
+from vgs.grasping.agent import GraspAgent  # noqa: E402
+from vgs.grasping.preprocess import peg_mask  # noqa: E402
+
+
+def load_run(run_dir: Path) -> tuple[ExperimentConfig, str, GraspAgent, GraspAgent]:
+    """Config, mode, untrained agent and trained agent of a training run.
+
+    Raises:
+        ConfigError: If the folder holds no finished checkpoint.
+    """
+    meta_path, ckpt = run_dir / "run.json", run_dir / "checkpoint.pt"
+    if not meta_path.exists() or not ckpt.exists():
+        raise ConfigError("run_dir", f"{run_dir} holds no training run (run.json, checkpoint.pt)")
+    meta = json.loads(meta_path.read_text())
+    cfg = from_dict(ExperimentConfig, meta["config"])
+    untrained = GraspAgent(cfg.network, cfg.agent, device="cpu", seed=cfg.seed)
+    trained = GraspAgent(cfg.network, cfg.agent, device="cpu", seed=cfg.seed)
+    saved = torch.load(ckpt, map_location="cpu", weights_only=False)
+    trained.load_state_dict(saved["agent"])
+    return cfg, meta["mode"], untrained, trained
+
+
+def plot_heatmaps(run_dir: Path, out: Path, scenes: int = 2, seed: int = 12345) -> Path:
+    """Write the figure: one row per scene, untrained and trained Q maps side by side."""
+    cfg, mode, untrained, trained = load_run(run_dir)
+    runner = EpisodeRunner(cfg)
+    fig, axes = plt.subplots(scenes, 2, figsize=(8, 4 * scenes), squeeze=False)
+    for s in range(scenes):
+        hm = runner.observe(episode_seed(seed, s))
+        mask = peg_mask(hm.depth)
+        extent = (hm.origin[0], hm.origin[0] + hm.depth.shape[1] * hm.pixel_size,
+                  hm.origin[1], hm.origin[1] + hm.depth.shape[0] * hm.pixel_size)
+        for col, (agent, title) in enumerate(((untrained, "untrained"), (trained, "trained"))):
+            q = agent.q_values(hm.color, hm.depth).max(axis=0)
+            ax = axes[s, col]
+            ax.imshow(hm.color, origin="lower", extent=extent)
+            shown = np.ma.masked_where(~mask, q)
+            im = ax.imshow(shown, origin="lower", extent=extent, cmap="jet", alpha=0.75)
+            masked = np.where(mask, q, -np.inf)
+            i, j = np.unravel_index(int(np.argmax(masked)), q.shape)
+            x, y = hm.pixel_to_world(i, j)
+            ax.plot(x, y, "w+", ms=14, mew=2)
+            ax.set_title(f"{title} ({mode})")
+            ax.set_xlabel("x [m]")
+            ax.set_ylabel("y [m]")
+            fig.colorbar(im, ax=ax, fraction=0.046, label="max over rotations of Q")
+    fig.suptitle("Grasp Q values on the peg (cross: greedy grasp)")
+    fig.tight_layout()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out

@@ -1,0 +1,271 @@
+"""Self-supervised training of the grasp network: VGS (grasp + assembly reward) or the baseline.
+
+The loop reads top to bottom; one iteration is one episode:
+
+1. the cell is reset with the episode's seed (``SeedSequence([seed, episode])``) and the camera
+   gives the heightmap s;
+2. the agent picks (rotation k, row i, col j) epsilon-greedily (random pixel on the peg while
+   exploring); the pixel becomes the world grasp point and theta_k the closing direction;
+3. the grasp primitive and the assembly module run; the episode record comes back;
+4. reward R = r_G + r_AM (paper eq. 5); r_AM only in ``vgs`` mode, when the assembly succeeded
+   faster than the threshold;
+5. one SGD step on the executed pixel (plus ``replay_batch`` prioritised replays);
+6. a row is appended to ``episodes.csv``, scalars go to TensorBoard, and every
+   ``checkpoint_every`` episodes the whole state is saved.
+
+Bootstrap: each grasp-and-assembly ends the episode and the next peg is placed independently of
+the action, so the TD target is ``y = R`` (``done=True``). Adding ``gamma max Q_tar(s')`` with an
+independent s' would add the same expected constant to every action's target and change no
+decision.
+
+Threshold: ``reward.threshold_s`` if given; otherwise, during the random-exploration phase the
+running ``threshold_percentile`` of the successful assembly times seen so far, frozen at the end
+of that phase and written to ``threshold.json``.
+
+Resume: a run started again with the same ``--out`` loads ``checkpoint.pt`` (both networks,
+optimiser, replay, RNG states, threshold, episode counter), drops the rows of ``episodes.csv``
+written after that checkpoint, and continues.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from tqdm import tqdm
+
+from vgs.assembly.episode import EpisodeRunner, GraspCommand
+from vgs.config import ExperimentConfig, from_dict, to_dict
+from vgs.errors import ConfigError
+from vgs.grasping.agent import DeltaQMonitor, GraspAction, GraspAgent
+from vgs.grasping.preprocess import peg_mask
+from vgs.grasping.replay import ReplayBuffer, Transition
+from vgs.grasping.rewards import MODES, derive_threshold, grasp_reward
+from vgs.sim.camera import Heightmap
+
+CSV_COLUMNS = (
+    "episode", "mode", "seed", "epsilon", "explored", "rotation", "row", "col", "q_value",
+    "grasp_success", "grasp_offset_mm", "assembly_success", "assembly_time_s", "adjustments",
+    "failure_reason", "r_grasp", "r_assembly", "reward", "threshold_s", "loss", "delta_q",
+    "wall_s",
+)
+
+
+def episode_seed(root: int, episode: int) -> int:
+    """Seed of one episode from (root seed, episode index)."""
+    return int(np.random.SeedSequence([root, episode]).generate_state(1)[0])
+
+
+def action_to_command(action: GraspAction, hm: Heightmap) -> GraspCommand:
+    """World grasp of a pixel-wise action.
+
+    The network's closing direction of rotation k is ``(cos theta_k, sin theta_k)`` in
+    (column, row) pixel axes, which are the world (x, y) axes of the heightmap; the grasp
+    primitive takes the heading of the pads' long side, perpendicular to the closing direction.
+    """
+    x, y = hm.pixel_to_world(action.row, action.col)
+    return GraspCommand(float(x), float(y), float(action.angle - math.pi / 2))
+
+
+def resolve_device(name: str) -> str:
+    if name == "auto":
+        return "cuda" if torch.cuda.is_available() else "cpu"
+    if name == "cuda" and not torch.cuda.is_available():
+        raise ConfigError("train.device", "cuda requested but no GPU is available")
+    return name
+
+
+def git_revision() -> str:
+    try:
+        out = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True,
+                             cwd=Path(__file__).resolve().parent, timeout=5)
+        return out.stdout.strip() or "unknown"
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+
+
+@dataclass
+class TrainState:
+    """Everything a checkpoint restores besides the networks."""
+
+    episode: int = 0
+    threshold: float | None = None
+    exploration_times: list[float] | None = None
+    rng_state: dict[str, Any] | None = None
+
+
+def _open_csv(path: Path, start_episode: int) -> Any:
+    """Append-only per-episode table; rows after the checkpoint are dropped on resume."""
+    rows: list[dict[str, str]] = []
+    if path.exists():
+        with path.open(newline="") as f:
+            rows = [r for r in csv.DictReader(f) if int(r["episode"]) < start_episode]
+    f = path.open("w", newline="")
+    writer = csv.DictWriter(f, fieldnames=CSV_COLUMNS)
+    writer.writeheader()
+    writer.writerows(rows)
+    f.flush()
+    return f, writer
+
+
+def save_checkpoint(path: Path, agent: GraspAgent, replay: ReplayBuffer, state: TrainState,
+                    monitor: DeltaQMonitor) -> None:
+    """Write atomically (temporary file, then rename): a kill never leaves half a checkpoint."""
+    tmp = path.with_suffix(".tmp")
+    torch.save({"agent": agent.state_dict(), "replay": replay.state_dict(),
+                "episode": state.episode, "threshold": state.threshold,
+                "exploration_times": state.exploration_times, "rng_state": state.rng_state,
+                "monitor": monitor.state_dict(), "torch_rng": torch.get_rng_state()}, tmp)
+    os.replace(tmp, path)
+
+
+def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True) -> Path:
+    """Train (or resume) one policy; return the run directory.
+
+    Raises:
+        ConfigError: On an unknown mode or a run directory made with another mode.
+    """
+    if mode not in MODES:
+        raise ConfigError("mode", f"must be one of {MODES}, got {mode!r}")
+    out.mkdir(parents=True, exist_ok=True)
+    meta_path = out / "run.json"
+    if meta_path.exists():
+        meta = json.loads(meta_path.read_text())
+        if meta["mode"] != mode:
+            raise ConfigError("mode", f"{out} holds a {meta['mode']} run, not {mode}")
+        cfg = from_dict(ExperimentConfig, meta["config"])  # resume with the saved config
+    else:
+        meta_path.write_text(json.dumps({"mode": mode, "config": to_dict(cfg),
+                                         "git_revision": git_revision(),
+                                         "python": sys.version.split()[0],
+                                         "torch": torch.__version__}, indent=2))
+    total = cfg.train.episodes
+    device = resolve_device(cfg.train.device)
+    torch.set_num_threads(max(1, min(4, os.cpu_count() or 1)))
+    agent = GraspAgent(cfg.network, cfg.agent, device=device, seed=cfg.seed)
+    replay = ReplayBuffer(cfg.agent.replay_capacity)
+    monitor = DeltaQMonitor.from_config(cfg.agent)
+    state = TrainState(exploration_times=[])
+    rng = np.random.default_rng([cfg.seed, 7])
+    ckpt = out / "checkpoint.pt"
+    if ckpt.exists():
+        saved = torch.load(ckpt, map_location=device, weights_only=False)
+        agent.load_state_dict(saved["agent"])
+        replay.load_state_dict(saved["replay"])
+        monitor.load_state_dict(saved["monitor"])
+        torch.set_rng_state(saved["torch_rng"])
+        state = TrainState(saved["episode"], saved["threshold"], saved["exploration_times"],
+                           saved["rng_state"])
+        rng.bit_generator.state = state.rng_state
+    if cfg.reward.threshold_s is not None:
+        state.threshold = cfg.reward.threshold_s
+
+    from torch.utils.tensorboard import SummaryWriter
+
+    writer = SummaryWriter(str(out / "tensorboard"), purge_step=state.episode)
+    csv_file, table = _open_csv(out / "episodes.csv", state.episode)
+    runner = EpisodeRunner(cfg)
+    bar = tqdm(range(state.episode, total), initial=state.episode, total=total,
+               desc=f"train {mode}", disable=not progress, dynamic_ncols=True)
+    recent: list[tuple[bool, float]] = []
+    try:
+        for episode in bar:
+            t0 = time.perf_counter()
+            seed = episode_seed(cfg.seed, episode)
+            epsilon = agent.epsilon(episode, total)
+            chosen: dict[str, Any] = {}
+
+            def policy(hm: Heightmap, epsilon: float = epsilon,
+                       chosen: dict[str, Any] = chosen) -> GraspCommand:
+                action = agent.act(hm.color, hm.depth, epsilon, peg_mask(hm.depth), rng,
+                                   skip_q_if_exploring=True)
+                chosen["action"], chosen["hm"] = action, hm
+                return action_to_command(action, hm)
+
+            record, _, _ = runner.run(seed, policy)
+            action, hm = chosen["action"], chosen["hm"]
+
+            # Reward (eq. 5). The threshold is the running percentile while exploring.
+            exploring = episode < cfg.agent.random_episodes
+            time_ok = record.assembly_time if record.success else None
+            if cfg.reward.threshold_s is None and exploring and time_ok is not None:
+                state.exploration_times.append(time_ok)
+            if cfg.reward.threshold_s is None and (exploring or state.threshold is None):
+                times = state.exploration_times
+                state.threshold = (derive_threshold(times, cfg.reward.threshold_percentile)
+                                   if times else None)
+                if not exploring or episode == cfg.agent.random_episodes - 1:
+                    (out / "threshold.json").write_text(json.dumps(
+                        {"threshold_s": state.threshold, "n_times": len(times),
+                         "percentile": cfg.reward.threshold_percentile}))
+            threshold = state.threshold if state.threshold is not None else math.inf
+            r_grasp, r_asm = grasp_reward(record.grasp_success, time_ok, threshold, mode,
+                                          cfg.reward)
+            reward = r_grasp + r_asm
+
+            # Learning: the executed pixel, then prioritised replays.
+            transition = Transition(hm.color, hm.depth, action.action, reward, done=True)
+            stats = agent.update(transition)
+            replay.add(transition, stats["delta_q"])
+            agent.replay_update(replay, rng)
+            monitor.update(stats["delta_q"])
+
+            wall = time.perf_counter() - t0
+            row = {
+                "episode": episode, "mode": mode, "seed": seed, "epsilon": round(epsilon, 4),
+                "explored": int(action.explored), "rotation": action.rotation, "row": action.row,
+                "col": action.col, "q_value": action.q_value,
+                "grasp_success": int(record.grasp_success),
+                "grasp_offset_mm": record.grasp_offset * 1000.0,
+                "assembly_success": int(record.success),
+                "assembly_time_s": record.assembly_time, "adjustments": record.adjustments,
+                "failure_reason": record.failure_reason, "r_grasp": r_grasp,
+                "r_assembly": r_asm, "reward": reward,
+                "threshold_s": threshold if math.isfinite(threshold) else "",
+                "loss": stats["loss"], "delta_q": stats["delta_q"], "wall_s": round(wall, 3),
+            }
+            table.writerow(row)
+            csv_file.flush()
+            writer.add_scalar("charts/grasp_success", int(record.grasp_success), episode)
+            writer.add_scalar("charts/assembly_success", int(record.success), episode)
+            if record.success:
+                writer.add_scalar("charts/assembly_time_s", record.assembly_time, episode)
+                writer.add_scalar("charts/grasp_offset_abs_mm",
+                                  abs(record.grasp_offset) * 1000.0, episode)
+            writer.add_scalar("charts/epsilon", epsilon, episode)
+            writer.add_scalar("rewards/reward", reward, episode)
+            writer.add_scalar("rewards/r_assembly", r_asm, episode)
+            writer.add_scalar("losses/td_loss", stats["loss"], episode)
+            writer.add_scalar("losses/delta_q", stats["delta_q"], episode)
+            writer.add_scalar("losses/delta_q_window_mean", monitor.mean, episode)
+            writer.add_scalar("perf/episode_wall_s", wall, episode)
+
+            recent = (recent + [(record.grasp_success, record.assembly_time
+                                 if record.success else math.nan)])[-50:]
+            times = [t for _, t in recent if math.isfinite(t)]
+            bar.set_postfix(grasp=f"{np.mean([g for g, _ in recent]):.2f}",
+                            T=f"{np.mean(times):.1f}" if times else "-",
+                            eps=f"{epsilon:.2f}", dQ=f"{stats['delta_q']:.3f}",
+                            loss=f"{stats['loss']:.3f}", conv=int(monitor.converged))
+
+            state.episode = episode + 1
+            if state.episode % cfg.train.checkpoint_every == 0 or state.episode == total:
+                state.rng_state = rng.bit_generator.state
+                save_checkpoint(ckpt, agent, replay, state, monitor)
+    finally:
+        csv_file.close()
+        writer.close()
+    (out / "convergence.json").write_text(json.dumps(
+        {"delta_q_threshold": cfg.agent.delta_q_threshold, "window": cfg.agent.delta_q_window,
+         "converged": bool(monitor.converged), "delta_q_window_mean": monitor.mean}))
+    return out
