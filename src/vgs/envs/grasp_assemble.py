@@ -5,7 +5,8 @@ heightmaps. Action: ``(rotation k, row i, col j)`` as the grasp network outputs 
 (i, j) is the grasp point and theta_k = 2 pi k / R the closing direction. Reward: paper eq. 5,
 ``r_G`` for a successful grasp plus, in ``vgs`` mode, ``r_AM`` when the assembly succeeded in
 less than ``threshold_s``. Every step terminates the episode; ``info["record"]`` is the episode
-record.
+record
+(``EpisodeRecord.to_row()``, with None for undefined fields).
 """
 
 from __future__ import annotations
@@ -83,4 +84,7 @@ class GraspAssembleEnv(gym.Env):
         time_ok = record.assembly_time if record.success else None
         r_g, r_am = grasp_reward(record.grasp_success, time_ok, self.threshold_s, self.mode,
                                  self.cfg.reward)
-        return self._obs(hm), float(r_g + r_am), True, False, {"record": record.to_row()}
+        # Undefined fields (NaN, e.g. no grasp offset without a grasp) are given as None.
+        row = {k: (None if isinstance(v, float) and np.isnan(v) else v)
+               for k, v in record.to_row().items()}
+        return self._obs(hm), float(r_g + r_am), True, False, {"record": row}

@@ -209,8 +209,10 @@ def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True) ->
                         {"threshold_s": state.threshold, "n_times": len(times),
                          "percentile": cfg.reward.threshold_percentile}))
             threshold = state.threshold if state.threshold is not None else math.inf
-            r_grasp, r_asm = grasp_reward(record.grasp_success, time_ok, threshold, mode,
-                                          cfg.reward)
+            # Before any assembly time is known no threshold exists, so no r_AM can be earned.
+            reward_mode = mode if state.threshold is not None else "baseline"
+            r_grasp, r_asm = grasp_reward(record.grasp_success, time_ok, state.threshold,
+                                          reward_mode, cfg.reward)
             reward = r_grasp + r_asm
 
             # Learning: the executed pixel, then prioritised replays.

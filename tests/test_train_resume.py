@@ -1,0 +1,80 @@
+"""Training: a killed run resumes from its checkpoint with the same episode count and RNG."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import pytest
+
+from vgs.config import ExperimentConfig, override, profile
+from vgs.errors import ConfigError
+from vgs.experiments import train as train_mod
+
+
+def tiny_config() -> ExperimentConfig:
+    cfg = profile("smoke")
+    cfg = override(cfg, "cell.camera.size", 64)
+    cfg = override(cfg, "cell.camera.pixel_size", 0.007)
+    cfg = override(cfg, "train.episodes", 3)
+    cfg = override(cfg, "agent.random_episodes", 1)
+    return override(cfg, "train.checkpoint_every", 1)
+
+
+def rows(run: Path) -> list[dict[str, str]]:
+    with (run / "episodes.csv").open(newline="") as f:
+        return [{k: v for k, v in r.items() if k != "wall_s"} for r in csv.DictReader(f)]
+
+
+@pytest.mark.slow
+def test_killed_run_resumes_where_it_stopped(tmp_path: Path, monkeypatch) -> None:
+    cfg = tiny_config()
+    full = train_mod.train(cfg, "vgs", tmp_path / "full", progress=False)
+
+    calls = {"n": 0}
+    original = train_mod.EpisodeRunner.run
+
+    def dying_run(self, *args, **kwargs):
+        calls["n"] += 1
+        if calls["n"] == 3:
+            raise KeyboardInterrupt  # the session is killed during the third episode
+        return original(self, *args, **kwargs)
+
+    monkeypatch.setattr(train_mod.EpisodeRunner, "run", dying_run)
+    with pytest.raises(KeyboardInterrupt):
+        train_mod.train(cfg, "vgs", tmp_path / "resumed", progress=False)
+    assert [r["episode"] for r in rows(tmp_path / "resumed")] == ["0", "1"]
+    monkeypatch.setattr(train_mod.EpisodeRunner, "run", original)
+    train_mod.train(cfg, "vgs", tmp_path / "resumed", progress=False)
+
+    resumed = rows(tmp_path / "resumed")
+    assert [r["episode"] for r in resumed] == ["0", "1", "2"]
+    assert resumed == rows(full)  # same seeds, actions, rewards and losses
+
+
+def test_mode_mismatch_on_resume_is_an_error(tmp_path: Path) -> None:
+    (tmp_path / "run.json").write_text('{"mode": "baseline", "config": {}}')
+    with pytest.raises(ConfigError, match="mode"):
+        train_mod.train(tiny_config(), "vgs", tmp_path, progress=False)
+
+
+def test_unknown_mode_is_an_error(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match="mode"):
+        train_mod.train(tiny_config(), "greedy", tmp_path, progress=False)
+
+
+def test_action_to_command_maps_closing_direction_to_pad_heading() -> None:
+    import math
+
+    import numpy as np
+
+    from vgs.grasping.agent import GraspAction
+    from vgs.sim.camera import Heightmap
+
+    hm = Heightmap(np.zeros((8, 8, 3), np.uint8), np.zeros((8, 8), np.float32), (0.0, 0.0), 0.01)
+    action = GraspAction(rotation=0, row=2, col=5, angle=0.0, q_value=0.0, explored=False,
+                         q_map=None)
+    cmd = train_mod.action_to_command(action, hm)
+    assert (cmd.x, cmd.y) == pytest.approx((0.055, 0.025))
+    # Closing along +x (theta = 0) means the pads' long side lies along y.
+    assert math.cos(cmd.yaw) == pytest.approx(0.0, abs=1e-12)
