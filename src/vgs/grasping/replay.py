@@ -1,0 +1,301 @@
+"""Prioritised experience replay ranked by surprise, as in visual-pushing-grasping (VPG).
+
+Every stored transition carries its surprise, the absolute TD error Delta Q = |y - Q_eva(s, a)|
+of its last update (paper eq. 10). To replay, the n candidate transitions are sorted by
+surprise in ascending order (ties: older first) and the rank position
+
+    i = round(u * (n - 1)),   u ~ Power(a)  (density a * u^(a - 1) on [0, 1]),
+
+is drawn, with a = 2 by default (VPG's ``pow_law_exp``). Since P(u <= x) = x^a, the transition
+at rank i (0 = least surprising) is drawn with probability
+
+    P(i) = F((i + 1/2) / (n - 1)) - F((i - 1/2) / (n - 1)),   F(x) = clip(x, 0, 1)^a,
+
+which for a = 2 grows linearly with the rank, P(i) ~ 2 i / (n - 1)^2: the most surprising
+transitions are replayed most often, none is starved, and the ranking (unlike the raw errors)
+is insensitive to the scale of the rewards. After a replay, the caller writes the new Delta Q
+back with :meth:`ReplayBuffer.update_surprise`.
+
+The buffer has a fixed capacity; when it is full a new transition overwrites the oldest one
+(ring buffer). Arrays are allocated on the first insertion; the next-state arrays only when a
+first transition with a next state arrives. Memory per transition for a 224 x 224 heightmap:
+150,528 B colour + 200,704 B depth = 351 kB, twice that with a next state.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from vgs.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class Transition:
+    """One grasp experience (s, a, r, s', done).
+
+    Attributes:
+        color: RGB heightmap of s, uint8 (H, W, 3).
+        depth: Height map of s [m], float32 (H, W).
+        action: Executed action (rotation index, row, col).
+        reward: Reward R(s, a) = r_G + r_AM.
+        next_color: RGB heightmap of s', or ``None`` when no next state is stored.
+        next_depth: Height map of s' [m], or ``None``.
+        done: True if s is terminal for bootstrapping: the TD target is then y = r.
+    """
+
+    color: np.ndarray
+    depth: np.ndarray
+    action: tuple[int, int, int]
+    reward: float
+    next_color: np.ndarray | None = None
+    next_depth: np.ndarray | None = None
+    done: bool = True
+
+    def __post_init__(self) -> None:
+        if self.color.dtype != np.uint8 or self.color.ndim != 3 or self.color.shape[2] != 3:
+            raise ConfigError("transition.color", "must be uint8 (H, W, 3)")
+        if self.depth.shape != self.color.shape[:2]:
+            raise ConfigError("transition.depth", "must be (H, W) like the colour map")
+        if (self.next_color is None) != (self.next_depth is None):
+            raise ConfigError("transition.next_color", "give both next maps or neither")
+        if self.next_color is not None and (
+            self.next_color.shape != self.color.shape or self.next_depth.shape != self.depth.shape
+        ):
+            raise ConfigError("transition.next_color", "next maps must match the current ones")
+        if len(self.action) != 3:
+            raise ConfigError("transition.action", "must be (rotation, row, col)")
+        k, row, col = (int(a) for a in self.action)
+        h, w = self.depth.shape
+        if k < 0 or not (0 <= row < h and 0 <= col < w):
+            raise ConfigError("transition.action", f"{self.action} outside the {h} x {w} map")
+        if not np.isfinite(self.reward):
+            raise ConfigError("transition.reward", f"must be finite, got {self.reward!r}")
+
+    @property
+    def has_next(self) -> bool:
+        """True if a next state is stored."""
+        return self.next_color is not None
+
+
+_ARRAYS = ("color", "depth", "next_color", "next_depth", "has_next", "action", "reward", "done",
+           "surprise", "serial")
+
+
+class ReplayBuffer:
+    """Fixed-capacity ring buffer of transitions with rank-based prioritised sampling.
+
+    Args:
+        capacity: Largest number of stored transitions (``agent.replay_capacity``).
+        power: Exponent a of the power law over surprise ranks (VPG: 2); a = 1 is uniform.
+
+    Raises:
+        ConfigError: On a capacity < 1 or a power <= 0.
+    """
+
+    def __init__(self, capacity: int, power: float = 2.0) -> None:
+        if capacity < 1:
+            raise ConfigError("agent.replay_capacity", f"must be >= 1, got {capacity}")
+        if not (np.isfinite(power) and power > 0):
+            raise ConfigError("replay.power", f"must be > 0, got {power!r}")
+        self.capacity = int(capacity)
+        self.power = float(power)
+        self._size = 0
+        self._cursor = 0
+        self._count = 0
+        self._a: dict[str, np.ndarray | None] = dict.fromkeys(_ARRAYS)
+
+    def __len__(self) -> int:
+        return self._size
+
+    def _allocate(self, t: Transition) -> None:
+        n = self.capacity
+        self._a.update(
+            color=np.zeros((n, *t.color.shape), np.uint8),
+            depth=np.zeros((n, *t.depth.shape), np.float32),
+            has_next=np.zeros(n, bool),
+            action=np.zeros((n, 3), np.int64),
+            reward=np.zeros(n, np.float64),
+            done=np.zeros(n, bool),
+            surprise=np.zeros(n, np.float64),
+            serial=np.zeros(n, np.int64),
+        )
+
+    def add(self, transition: Transition, surprise: float) -> int:
+        """Store a transition with its surprise |TD error|; returns its slot index.
+
+        Raises:
+            ConfigError: If the heightmap size differs from the stored ones or the surprise is
+                negative or not finite.
+        """
+        if not (np.isfinite(surprise) and surprise >= 0):
+            raise ConfigError("replay.surprise", f"must be a finite value >= 0, got {surprise!r}")
+        a = self._a
+        if a["color"] is None:
+            self._allocate(transition)
+        elif transition.color.shape != a["color"].shape[1:]:
+            raise ConfigError(
+                "replay.transition",
+                f"heightmap {transition.color.shape[:2]} differs from the stored "
+                f"{a['color'].shape[1:3]}",
+            )
+        if transition.has_next and a["next_color"] is None:
+            a["next_color"] = np.zeros_like(a["color"])
+            a["next_depth"] = np.zeros_like(a["depth"])
+        i = self._cursor
+        a["color"][i] = transition.color
+        a["depth"][i] = transition.depth
+        a["has_next"][i] = transition.has_next
+        if transition.has_next:
+            a["next_color"][i] = transition.next_color
+            a["next_depth"][i] = transition.next_depth
+        a["action"][i] = [int(v) for v in transition.action]
+        a["reward"][i] = transition.reward
+        a["done"][i] = transition.done
+        a["surprise"][i] = surprise
+        a["serial"][i] = self._count
+        self._count += 1
+        self._cursor = (i + 1) % self.capacity
+        self._size = min(self._size + 1, self.capacity)
+        return i
+
+    def get(self, index: int) -> Transition:
+        """The transition in slot ``index`` (copies of the stored arrays).
+
+        Raises:
+            ConfigError: If the slot is empty.
+        """
+        self._check_index(index)
+        a = self._a
+        has_next = bool(a["has_next"][index])
+        return Transition(
+            color=a["color"][index].copy(),
+            depth=a["depth"][index].copy(),
+            action=tuple(int(v) for v in a["action"][index]),
+            reward=float(a["reward"][index]),
+            next_color=a["next_color"][index].copy() if has_next else None,
+            next_depth=a["next_depth"][index].copy() if has_next else None,
+            done=bool(a["done"][index]),
+        )
+
+    def surprise(self, index: int) -> float:
+        """Stored surprise of slot ``index``."""
+        self._check_index(index)
+        return float(self._a["surprise"][index])
+
+    def _check_index(self, index: int) -> None:
+        if not 0 <= index < self._size:
+            raise ConfigError("replay.index", f"slot {index} is empty (size {self._size})")
+
+    def update_surprise(self, index: int, surprise: float) -> None:
+        """Replace the surprise of slot ``index`` (after replaying it).
+
+        Raises:
+            ConfigError: On an empty slot or a negative or non-finite surprise.
+        """
+        self._check_index(index)
+        if not (np.isfinite(surprise) and surprise >= 0):
+            raise ConfigError("replay.surprise", f"must be a finite value >= 0, got {surprise!r}")
+        self._a["surprise"][index] = surprise
+
+    def ranked(self, exclude_reward: float | None = None) -> np.ndarray:
+        """Candidate slot indices sorted by surprise, ascending (ties: oldest first).
+
+        Args:
+            exclude_reward: Leave out transitions with exactly this reward (VPG replays
+                transitions whose reward differs from the latest one).
+        """
+        idx = np.arange(self._size)
+        if self._size and exclude_reward is not None:
+            idx = idx[self._a["reward"][: self._size] != exclude_reward]
+        if idx.size == 0:
+            return idx
+        order = np.lexsort((self._a["serial"][idx], self._a["surprise"][idx]))
+        return idx[order]
+
+    def sample_index(
+        self, rng: np.random.Generator, exclude_reward: float | None = None
+    ) -> int | None:
+        """Draw one slot by surprise rank with the power law (module docstring).
+
+        Returns:
+            A slot index, or ``None`` when there is no candidate.
+        """
+        ranked = self.ranked(exclude_reward)
+        if ranked.size == 0:
+            return None
+        u = float(rng.power(self.power))
+        return int(ranked[int(round(u * (ranked.size - 1)))])
+
+    def sample(
+        self, rng: np.random.Generator, exclude_reward: float | None = None
+    ) -> tuple[int, Transition] | None:
+        """Draw one transition by surprise rank; returns ``(slot, transition)`` or ``None``."""
+        index = self.sample_index(rng, exclude_reward)
+        return None if index is None else (index, self.get(index))
+
+    def rank_probabilities(self, n: int) -> np.ndarray:
+        """Exact probabilities P(i), i = 0..n-1, of drawing rank position i (0 = least surprise).
+
+        P(i) = F((i + 1/2) / (n - 1)) - F((i - 1/2) / (n - 1)) with F(x) = clip(x, 0, 1)^a;
+        for n = 1 the single transition has probability 1.
+        """
+        if n < 1:
+            raise ConfigError("replay.n", f"must be >= 1, got {n}")
+        if n == 1:
+            return np.ones(1)
+        i = np.arange(n, dtype=np.float64)
+        upper = np.clip((i + 0.5) / (n - 1), 0.0, 1.0) ** self.power
+        lower = np.clip((i - 0.5) / (n - 1), 0.0, 1.0) ** self.power
+        return upper - lower
+
+    def state_dict(self) -> dict[str, Any]:
+        """Picklable state: scalars and numpy arrays of the occupied slots (views, not copies)."""
+        n = self._size
+        arrays = {k: (None if v is None else v[:n]) for k, v in self._a.items()}
+        return {
+            "capacity": self.capacity,
+            "power": self.power,
+            "size": n,
+            "cursor": self._cursor,
+            "count": self._count,
+            "arrays": arrays,
+        }
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        """Restore a :meth:`state_dict` (same capacity).
+
+        Raises:
+            ConfigError: On a capacity mismatch or missing entries.
+        """
+        missing = {"capacity", "power", "size", "cursor", "count", "arrays"} - set(state)
+        if missing:
+            raise ConfigError("replay.state", f"missing entries {sorted(missing)}")
+        if int(state["capacity"]) != self.capacity:
+            raise ConfigError(
+                "agent.replay_capacity",
+                f"checkpoint capacity {state['capacity']} != buffer capacity {self.capacity}",
+            )
+        size = int(state["size"])
+        arrays = state["arrays"]
+        if set(arrays) != set(_ARRAYS):
+            raise ConfigError("replay.state", f"array names {sorted(arrays)} != {list(_ARRAYS)}")
+        self.power = float(state["power"])
+        self._size, self._cursor, self._count = size, int(state["cursor"]), int(state["count"])
+        self._a = dict.fromkeys(_ARRAYS)
+        if arrays["color"] is None:
+            return
+        for name, value in arrays.items():
+            if value is None:
+                continue
+            value = np.asarray(value)
+            if value.shape[0] != size:
+                raise ConfigError("replay.state", f"array {name} holds {value.shape[0]} != {size}")
+            full = np.zeros((self.capacity, *value.shape[1:]), value.dtype)
+            full[:size] = value
+            self._a[name] = full
+
+
+__all__ = ["ReplayBuffer", "Transition"]
