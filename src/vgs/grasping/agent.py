@@ -1,0 +1,448 @@
+"""DQN grasp agent with an evaluation and a target network (paper 3.1, eq. 4-11).
+
+**Networks.** The evaluation network Q_eva (parameters theta) is trained; the target network
+Q_tar (parameters theta') has the same architecture and the same initial parameters, only runs
+forward passes, and copies the evaluation network, theta' <- theta (BatchNorm statistics
+included), after every ``target_update_period``-th update.
+
+**TD target.** For a transition (s, a, r, s', done)
+
+    y = r + gamma * max_{a'} Q_tar(s', a')   if a next state s' is given and done is False,
+    y = r                                     otherwise,
+
+where the max runs over all R rotations and all pixels of s' (as VPG). The paper uses
+gamma = 0.5 (eq. 8). In this project each grasp-and-assembly is one episode and the next
+observation is a fresh, independently placed peg, so the action cannot influence s'; the
+training loop may then store ``done=True`` (y = r, a contextual-bandit target) or store the next
+heightmap with ``done=False`` to follow eq. 8 literally. Both are supported per transition.
+
+**Loss.** With a = (k, i, j) the executed rotation and pixel, the Huber loss (eq. 11, smooth L1
+with beta = 1)
+
+    L(x) = 0.5 x^2 if |x| < 1 else |x| - 0.5,   x = y - Q_eva(s, a),
+
+is applied only at pixel (i, j) of rotation k and of the opposite rotation k' = (k + R/2) mod R
+(the two-finger gripper is symmetric; as VPG, for even R only), and summed over these one or two
+terms; every other output pixel gets zero gradient. The parameters take one SGD step
+(momentum, weight decay). Each update returns Delta Q = |y - Q_eva(s, a)| (eq. 10), measured
+before the step.
+
+**BatchNorm.** Actions and TD targets use eval mode (running statistics); the update's forward
+pass uses train mode (batch statistics over the one or two rotated copies).
+
+**Exploration.** Episodes e < N_random (``random_episodes``) act at random (epsilon = 1); after
+that epsilon anneals linearly from epsilon_start to epsilon_end over the remaining episodes:
+
+    epsilon(e) = eps_start + (eps_end - eps_start) * min(1, (e - N_random) / D),
+    D = max(1, E - N_random - 1),
+
+with E the total number of episodes. An exploratory action picks a uniformly random valid pixel
+and a uniformly random rotation; a greedy one the argmax of Q over (R, H, W) restricted to valid
+pixels.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from collections import deque
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import torch
+import torch.nn.functional as F
+from torch import Tensor
+
+from vgs.config import AgentConfig, NetworkConfig, to_dict
+from vgs.errors import ConfigError
+from vgs.grasping.network import GraspQNetwork, rotation_angle
+from vgs.grasping.preprocess import check_heightmaps, preprocess
+from vgs.grasping.replay import ReplayBuffer, Transition
+
+HUBER_BETA = 1.0
+
+
+@dataclass(frozen=True)
+class GraspAction:
+    """A chosen grasp.
+
+    Attributes:
+        rotation: Rotation index k in [0, R).
+        row: Pixel row i.
+        col: Pixel column j.
+        angle: theta_k = 2 pi k / R [rad].
+        q_value: Q_eva(s, (k, i, j)) (NaN if the forward pass was skipped).
+        explored: True if chosen at random (epsilon branch).
+        q_map: The whole Q map (R, H, W) of the evaluation network in eval mode, or None if
+            the forward pass was skipped (``skip_q_if_exploring``).
+    """
+
+    rotation: int
+    row: int
+    col: int
+    angle: float
+    q_value: float
+    explored: bool
+    q_map: np.ndarray | None = field(repr=False)
+
+    @property
+    def action(self) -> tuple[int, int, int]:
+        """``(rotation, row, col)`` as stored in a :class:`Transition`."""
+        return self.rotation, self.row, self.col
+
+
+def opposite_rotation(k: int, num_rotations: int) -> int | None:
+    """(k + R/2) mod R for even R (the same two-finger grasp turned by 180 degrees), else None."""
+    if num_rotations % 2 or num_rotations < 2:
+        return None
+    return (k + num_rotations // 2) % num_rotations
+
+
+def td_loss(q: Tensor, rotations: Sequence[int], row: int, col: int, target: float) -> Tensor:
+    """Huber loss at one pixel of the given rotations, summed.
+
+    L = sum_{r in rotations} huber(q[r, row, col] - target), huber(x) = 0.5 x^2 for |x| < 1 and
+    |x| - 0.5 otherwise (smooth L1, beta = 1). All other entries of q get zero gradient.
+
+    Args:
+        q: Q maps (n, H, W).
+        rotations: Indices into the first axis of q.
+        row: Pixel row.
+        col: Pixel column.
+        target: TD target y.
+    """
+    values = q[list(rotations), row, col]
+    y = torch.full_like(values, float(target))
+    return F.smooth_l1_loss(values, y, reduction="sum", beta=HUBER_BETA)
+
+
+def epsilon_schedule(episode: int, total_episodes: int, cfg: AgentConfig) -> float:
+    """Exploration rate of an episode (module docstring).
+
+    Raises:
+        ConfigError: On a negative episode or total_episodes < 1.
+    """
+    if episode < 0:
+        raise ConfigError("agent.episode", f"must be >= 0, got {episode}")
+    if total_episodes < 1:
+        raise ConfigError("train.episodes", f"must be >= 1, got {total_episodes}")
+    if episode < cfg.random_episodes:
+        return 1.0
+    span = max(1, total_episodes - cfg.random_episodes - 1)
+    frac = min(1.0, (episode - cfg.random_episodes) / span)
+    return cfg.epsilon_start + (cfg.epsilon_end - cfg.epsilon_start) * frac
+
+
+class DeltaQMonitor:
+    """Convergence rule of the paper: Delta Q stays below a threshold over a window.
+
+    Converged once the last ``window`` recorded values are all < ``threshold``.
+
+    Args:
+        threshold: ``agent.delta_q_threshold``.
+        window: ``agent.delta_q_window`` (number of values).
+
+    Raises:
+        ConfigError: On a threshold <= 0 or a window < 1.
+    """
+
+    def __init__(self, threshold: float, window: int) -> None:
+        if not (math.isfinite(threshold) and threshold > 0):
+            raise ConfigError("agent.delta_q_threshold", f"must be > 0, got {threshold!r}")
+        if window < 1:
+            raise ConfigError("agent.delta_q_window", f"must be >= 1, got {window}")
+        self.threshold = float(threshold)
+        self.window = int(window)
+        self._values: deque[float] = deque(maxlen=self.window)
+
+    @classmethod
+    def from_config(cls, cfg: AgentConfig) -> DeltaQMonitor:
+        """Monitor with ``cfg.delta_q_threshold`` and ``cfg.delta_q_window``."""
+        return cls(cfg.delta_q_threshold, cfg.delta_q_window)
+
+    def update(self, delta_q: float) -> bool:
+        """Record one Delta Q; returns :attr:`converged`."""
+        if not math.isfinite(delta_q) or delta_q < 0:
+            raise ConfigError("agent.delta_q", f"must be a finite value >= 0, got {delta_q!r}")
+        self._values.append(float(delta_q))
+        return self.converged
+
+    @property
+    def converged(self) -> bool:
+        """True when the window is full and every value in it is below the threshold."""
+        return len(self._values) == self.window and max(self._values) < self.threshold
+
+    @property
+    def mean(self) -> float:
+        """Mean Delta Q over the current window (NaN when empty)."""
+        return float(np.mean(self._values)) if self._values else math.nan
+
+    def state_dict(self) -> dict[str, Any]:
+        """Picklable state."""
+        return {"threshold": self.threshold, "window": self.window, "values": list(self._values)}
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        """Restore a :meth:`state_dict`."""
+        self.threshold = float(state["threshold"])
+        self.window = int(state["window"])
+        self._values = deque((float(v) for v in state["values"]), maxlen=self.window)
+
+
+class GraspAgent:
+    """Evaluation and target grasp Q networks, SGD, Huber TD updates and epsilon-greedy actions.
+
+    Heightmaps are passed raw, as the simulator gives them: ``color`` uint8 (H, W, 3) and
+    ``depth`` float32 (H, W) [m]; the agent normalises them (:mod:`vgs.grasping.preprocess`).
+
+    Args:
+        network_cfg: Network configuration (backbone, R, weights, depth normalisation).
+        agent_cfg: Learning rate, momentum, weight decay, gamma, exploration, target period.
+        device: Torch device string (``"cpu"`` or ``"cuda"``).
+        seed: Seed of the network initialisation (the global torch RNG is left untouched).
+        rotate: Rotation mode of :class:`GraspQNetwork` (``"input"`` or ``"features"``).
+        channels_last: Channels-last memory format for the networks.
+
+    Attributes:
+        eva_net: Evaluation network Q_eva.
+        target_net: Target network Q_tar.
+        optimizer: SGD on the evaluation network.
+        updates: Number of gradient updates so far.
+    """
+
+    def __init__(
+        self,
+        network_cfg: NetworkConfig,
+        agent_cfg: AgentConfig,
+        device: str = "cpu",
+        seed: int = 0,
+        rotate: str = "input",
+        channels_last: bool = False,
+    ) -> None:
+        self.network_cfg = network_cfg
+        self.agent_cfg = agent_cfg
+        self.device = torch.device(device)
+        self.rotate = rotate
+        with torch.random.fork_rng(devices=[]):
+            torch.manual_seed(seed)
+            net = GraspQNetwork(network_cfg, rotate=rotate, channels_last=channels_last)
+        self.eva_net = net.to(self.device)
+        self.target_net = copy.deepcopy(self.eva_net).eval()
+        for p in self.target_net.parameters():
+            p.requires_grad_(False)
+        self.optimizer = torch.optim.SGD(
+            self.eva_net.parameters(),
+            lr=agent_cfg.learning_rate,
+            momentum=agent_cfg.momentum,
+            weight_decay=agent_cfg.weight_decay,
+        )
+        self.updates = 0
+
+    @property
+    def num_rotations(self) -> int:
+        """R."""
+        return self.network_cfg.num_rotations
+
+    def _inputs(self, color: np.ndarray, depth: np.ndarray) -> tuple[Tensor, Tensor]:
+        c, d = preprocess(color, depth, self.network_cfg)
+        return c.to(self.device), d.to(self.device)
+
+    def q_values(self, color: np.ndarray, depth: np.ndarray, target: bool = False) -> np.ndarray:
+        """Q map (R, H, W) of the evaluation (or target) network in eval mode, no gradients."""
+        net = self.target_net if target else self.eva_net
+        c, d = self._inputs(color, depth)
+        was_training = net.training
+        net.eval()
+        with torch.inference_mode():
+            q = net(c, d)[0].float().cpu().numpy()
+        net.train(was_training)
+        return q
+
+    def epsilon(self, episode: int, total_episodes: int) -> float:
+        """Exploration rate of ``episode`` out of ``total_episodes`` (module docstring)."""
+        return epsilon_schedule(episode, total_episodes, self.agent_cfg)
+
+    def act(
+        self,
+        color: np.ndarray,
+        depth: np.ndarray,
+        epsilon: float,
+        valid_mask: np.ndarray | None,
+        rng: np.random.Generator,
+        *,
+        skip_q_if_exploring: bool = False,
+    ) -> GraspAction:
+        """Epsilon-greedy grasp.
+
+        With probability epsilon: a uniformly random valid pixel and rotation. Otherwise the
+        argmax of Q_eva over (R, H, W), restricted to pixels where ``valid_mask`` is True when
+        the mask has any True pixel (an empty or absent mask allows every pixel).
+
+        Args:
+            color: RGB heightmap, uint8 (H, W, 3).
+            depth: Height map [m], float32 (H, W).
+            epsilon: Exploration probability in [0, 1].
+            valid_mask: Boolean (H, W) of allowed pixels (for example :func:`peg_mask`), or None.
+            rng: Random generator for the exploration draws.
+            skip_q_if_exploring: Draw the exploration coin first and skip the forward pass
+                when it says explore; the action then has ``q_value`` NaN and ``q_map`` None.
+                Saves a full R-rotation forward pass per random grasp (the random phase).
+
+        Raises:
+            ConfigError: On an epsilon outside [0, 1] or a mask of the wrong shape.
+        """
+        if not 0.0 <= epsilon <= 1.0:
+            raise ConfigError("agent.epsilon", f"must lie in [0, 1], got {epsilon!r}")
+        check_heightmaps(color, depth)
+        height, width = depth.shape
+        explored = bool(rng.random() < epsilon)
+        q = None if explored and skip_q_if_exploring else self.q_values(color, depth)
+        if valid_mask is None:
+            valid = np.ones((height, width), bool)
+        else:
+            valid = np.asarray(valid_mask, dtype=bool)
+            if valid.shape != (height, width):
+                raise ConfigError(
+                    "agent.valid_mask", f"must be {(height, width)}, got {valid.shape}"
+                )
+            if not valid.any():
+                valid = np.ones((height, width), bool)
+        if explored:
+            rows, cols = np.nonzero(valid)
+            pick = int(rng.integers(rows.size))
+            k, i, j = int(rng.integers(self.num_rotations)), int(rows[pick]), int(cols[pick])
+        else:
+            masked = np.where(valid[None], q, -np.inf)
+            k, i, j = (int(v) for v in np.unravel_index(int(np.argmax(masked)), masked.shape))
+        return GraspAction(
+            rotation=k, row=i, col=j, angle=rotation_angle(k, self.num_rotations),
+            q_value=math.nan if q is None else float(q[k, i, j]), explored=explored, q_map=q,
+        )
+
+    def target_value(self, transition: Transition) -> float:
+        """TD target y: r + gamma max Q_tar(s', .) with a next state and not done, else r."""
+        if transition.has_next and not transition.done:
+            q_next = self.q_values(transition.next_color, transition.next_depth, target=True)
+            return float(transition.reward + self.agent_cfg.gamma * float(q_next.max()))
+        return float(transition.reward)
+
+    def update(self, transition: Transition) -> dict[str, float]:
+        """One SGD step on one transition.
+
+        Returns:
+            ``loss`` (summed Huber loss before the step), ``delta_q`` = |y - Q_eva(s, a)|,
+            ``q_eva`` = Q_eva(s, a) (train-mode forward before the step) and ``target`` = y.
+
+        Raises:
+            ConfigError: If the action's rotation is outside [0, R) or its pixel outside the map.
+        """
+        k, row, col = (int(v) for v in transition.action)
+        rotation_angle(k, self.num_rotations)
+        height, width = transition.depth.shape
+        if not (0 <= row < height and 0 <= col < width):
+            raise ConfigError("transition.action", f"pixel {(row, col)} outside the map")
+        y = self.target_value(transition)
+        opposite = opposite_rotation(k, self.num_rotations)
+        rotations = [k] if opposite is None or opposite == k else [k, opposite]
+        c, d = self._inputs(transition.color, transition.depth)
+        self.eva_net.train()
+        q = self.eva_net(c, d, rotations=rotations)[0]
+        loss = td_loss(q, range(len(rotations)), row, col, y)
+        q_eva = float(q[0, row, col].detach())
+        self.optimizer.zero_grad(set_to_none=True)
+        loss.backward()
+        self.optimizer.step()
+        self.updates += 1
+        if self.updates % self.agent_cfg.target_update_period == 0:
+            self.sync_target()
+        return {"loss": float(loss.detach()), "delta_q": abs(y - q_eva), "q_eva": q_eva,
+                "target": y}
+
+    def replay_update(
+        self,
+        buffer: ReplayBuffer,
+        rng: np.random.Generator,
+        exclude_reward: float | None = None,
+    ) -> list[dict[str, float]]:
+        """``agent.replay_batch`` prioritised replays, each followed by a surprise update.
+
+        Each replay draws a transition by surprise rank (:class:`ReplayBuffer`), recomputes its
+        TD target with the current target network, takes one :meth:`update` step and stores
+        the new Delta Q as its surprise.
+
+        Args:
+            buffer: The replay buffer.
+            rng: Random generator for the rank draws.
+            exclude_reward: Optionally replay only transitions whose reward differs from this
+                value (VPG replays the opposite outcome of the latest grasp).
+
+        Returns:
+            One :meth:`update` dict per replay, with the slot as ``index``; empty if the buffer
+            holds no candidate.
+        """
+        results: list[dict[str, float]] = []
+        for _ in range(self.agent_cfg.replay_batch):
+            drawn = buffer.sample(rng, exclude_reward)
+            if drawn is None:
+                break
+            index, transition = drawn
+            stats = self.update(transition)
+            buffer.update_surprise(index, stats["delta_q"])
+            results.append({**stats, "index": float(index)})
+        return results
+
+    def sync_target(self) -> None:
+        """theta' <- theta: copy the evaluation network (parameters and BN buffers)."""
+        self.target_net.load_state_dict(self.eva_net.state_dict())
+        self.target_net.eval()
+
+    def state_dict(self) -> dict[str, Any]:
+        """Both networks, the optimiser, the update counter and the configuration."""
+        return {
+            "eva_net": self.eva_net.state_dict(),
+            "target_net": self.target_net.state_dict(),
+            "optimizer": self.optimizer.state_dict(),
+            "updates": self.updates,
+            "network_cfg": to_dict(self.network_cfg),
+            "rotate": self.rotate,
+        }
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        """Restore a :meth:`state_dict`.
+
+        Raises:
+            ConfigError: ``agent.checkpoint`` on missing entries or a different architecture.
+        """
+        missing = {"eva_net", "target_net", "optimizer", "updates"} - set(state)
+        if missing:
+            raise ConfigError("agent.checkpoint", f"missing entries {sorted(missing)}")
+        if state.get("rotate", self.rotate) != self.rotate:
+            raise ConfigError("agent.checkpoint", f"saved with rotate={state['rotate']!r}")
+        saved = state.get("network_cfg")
+        mine = to_dict(self.network_cfg)
+        if saved is not None and any(saved.get(k) != mine[k]
+                                     for k in ("backbone", "num_rotations")):
+            raise ConfigError(
+                "agent.checkpoint",
+                f"saved for {saved.get('backbone')} with R={saved.get('num_rotations')}, "
+                f"this agent is {mine['backbone']} with R={mine['num_rotations']}",
+            )
+        try:
+            self.eva_net.load_state_dict(state["eva_net"])
+            self.target_net.load_state_dict(state["target_net"])
+        except RuntimeError as exc:
+            raise ConfigError("agent.checkpoint", str(exc)) from exc
+        self.optimizer.load_state_dict(state["optimizer"])
+        self.updates = int(state["updates"])
+        self.target_net.eval()
+
+
+__all__ = [
+    "DeltaQMonitor",
+    "GraspAction",
+    "GraspAgent",
+    "epsilon_schedule",
+    "opposite_rotation",
+    "td_loss",
+]
