@@ -211,6 +211,32 @@ def cmd_model_info(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     return 0
 
 
+def cmd_train(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
+    """Train (or resume) the VGS or baseline grasp policy."""
+    from vgs.experiments.train import train
+
+    if args.episodes is not None:
+        cfg = apply_override(cfg, "train.episodes", args.episodes)
+    if args.backbone is not None:
+        cfg = apply_override(cfg, "network.backbone", args.backbone)
+    if args.seed is not None:
+        cfg = apply_override(cfg, "seed", args.seed)
+    if args.device is not None:
+        cfg = apply_override(cfg, "train.device", args.device)
+    out = train(cfg, args.mode, Path(args.out), progress=not args.no_progress)
+    print(f"run in {out}: episodes.csv, tensorboard/, checkpoint.pt")
+    return 0
+
+
+def cmd_heatmap(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
+    """Q-value heat maps of a training run, untrained beside trained (paper Figure 7)."""
+    from vgs.experiments.heatmap import plot_heatmaps
+
+    out = plot_heatmaps(Path(args.run_dir), Path(args.out), scenes=args.scenes)
+    print(f"wrote {out}")
+    return 0
+
+
 # -- parser -------------------------------------------------------------------------------------
 
 
@@ -237,7 +263,7 @@ def _common() -> argparse.ArgumentParser:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The ``vgs`` argument parser with its four subcommands."""
+    """The ``vgs`` argument parser with its subcommands."""
     common = _common()
     parser = _Parser(prog="vgs", description="Visual grasping strategy for peg-in-hole "
                                              "assembly (UR5 + RG2 in MuJoCo).")
@@ -288,6 +314,25 @@ def build_parser() -> argparse.ArgumentParser:
     info.add_argument("--size", type=int, default=224, help="heightmap side [px]")
     info.add_argument("--json", action="store_true", help="print JSON")
     info.set_defaults(func=cmd_model_info)
+
+    train = sub.add_parser("train", parents=[common],
+                           help="train the grasp policy (vgs or baseline); resumes from --out")
+    train.add_argument("--mode", required=True, choices=("vgs", "baseline"),
+                       help="vgs: grasp + assembly reward; baseline: grasp reward only")
+    train.add_argument("--out", required=True, help="run folder (started again: resumes)")
+    train.add_argument("--episodes", type=int, help="episodes in all (default: the profile's)")
+    train.add_argument("--backbone", help="densenet121 or light (default: the profile's)")
+    train.add_argument("--seed", type=int, help="root seed (default: the profile's)")
+    train.add_argument("--device", help="cpu, cuda or auto (default: the profile's)")
+    train.add_argument("--no-progress", action="store_true", help="no progress bar")
+    train.set_defaults(func=cmd_train)
+
+    heat = sub.add_parser("heatmap", parents=[common],
+                          help="Q heat maps of a run, untrained beside trained (Fig. 7)")
+    heat.add_argument("run_dir", help="a training run folder")
+    heat.add_argument("--out", required=True, help="figure file (PNG)")
+    heat.add_argument("--scenes", type=int, default=2, help="scenes, one per row")
+    heat.set_defaults(func=cmd_heatmap)
     return parser
 
 
