@@ -30,6 +30,10 @@ def test_train_then_heatmap(tmp_path: Path) -> None:
     result = vgs("heatmap", str(run), "--out", str(fig), "--scenes", "1", *SMALL)
     assert result.returncode == 0, result.stderr
     assert fig.stat().st_size > 10_000
+    curves = tmp_path / "curves.png"
+    result = vgs("curves", str(run), "--out", str(curves), "--window", "2", "--json")
+    assert result.returncode == 0, result.stderr
+    assert "last_window" in result.stdout and curves.stat().st_size > 10_000
 
 
 @pytest.mark.parametrize(
@@ -39,6 +43,7 @@ def test_train_then_heatmap(tmp_path: Path) -> None:
         (["train", "--mode", "vgs", "--out", "x", "--episodes", "0"], "train.episodes"),
         (["train", "--mode", "vgs", "--out", "x", "--backbone", "resnet"], "network.backbone"),
         (["heatmap", "no/such/run", "--out", "x.png"], "run_dir"),
+        (["curves", "no/such/run", "--out", "x.png"], "run_dir"),
     ],
 )
 def test_bad_training_input_is_one_line_exit_2(args: list[str], field: str) -> None:

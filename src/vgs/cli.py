@@ -237,6 +237,25 @@ def cmd_heatmap(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     return 0
 
 
+def cmd_curves(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
+    """Learning curves of runs and where each policy grasps; prints a summary table."""
+    from vgs.experiments.curves import plot_curves
+
+    summaries = plot_curves([Path(r) for r in args.runs], Path(args.out), window=args.window)
+    if args.json:
+        print(json.dumps(_json_safe(summaries), indent=2))
+        return 0
+    print(f"{'run':<28} {'phase':<12} {'n':>4} {'grasp':>6} {'assembly':>8} {'T [s]':>7} "
+          f"{'|l| [mm]':>8} {'reward':>6}")
+    for label, phases in summaries.items():
+        for phase, s in phases.items():
+            print(f"{label:<28} {phase:<12} {s['episodes']:>4} {s['grasp_success']:>6.2f} "
+                  f"{s['assembly_success']:>8.2f} {s['assembly_time_mean_s']:>7.1f} "
+                  f"{s['abs_offset_mean_mm']:>8.1f} {s['reward_mean']:>6.3f}")
+    print(f"wrote {args.out}")
+    return 0
+
+
 # -- parser -------------------------------------------------------------------------------------
 
 
@@ -333,6 +352,14 @@ def build_parser() -> argparse.ArgumentParser:
     heat.add_argument("--out", required=True, help="figure file (PNG)")
     heat.add_argument("--scenes", type=int, default=2, help="scenes, one per row")
     heat.set_defaults(func=cmd_heatmap)
+
+    curves = sub.add_parser("curves", parents=[common],
+                            help="learning curves of runs and where each policy grasps")
+    curves.add_argument("runs", nargs="+", help="training run folders")
+    curves.add_argument("--out", required=True, help="figure file (PNG)")
+    curves.add_argument("--window", type=int, default=20, help="moving-mean window [episodes]")
+    curves.add_argument("--json", action="store_true", help="print the summary as JSON")
+    curves.set_defaults(func=cmd_curves)
     return parser
 
 

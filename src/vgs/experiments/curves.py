@@ -1,0 +1,97 @@
+"""Learning curves of training runs and where each policy grasps along the peg.
+
+Reads ``episodes.csv`` of one or more runs (``vgs train``) and draws, against the episode:
+the moving grasp success rate, the moving assembly time of successful assemblies and the
+moving reward; and the distribution of |grasp offset| (ground truth, analysis only) in the
+random-exploration phase beside the last ``window`` episodes. Also returns a summary per run.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+
+from vgs.errors import ConfigError  # noqa: E402
+
+
+def load_episodes(run_dir: Path) -> tuple[pd.DataFrame, dict]:
+    """The episode table and run metadata of a run.
+
+    Raises:
+        ConfigError: If the folder holds no episodes.
+    """
+    table, meta = run_dir / "episodes.csv", run_dir / "run.json"
+    if not table.exists() or not meta.exists():
+        raise ConfigError("run_dir", f"{run_dir} holds no training run (episodes.csv, run.json)")
+    return pd.read_csv(table), json.loads(meta.read_text())
+
+
+def summarize(df: pd.DataFrame, random_episodes: int, window: int) -> dict[str, float]:
+    """Grasp success, assembly success and time, |offset| in the random phase and at the end."""
+    def stats(part: pd.DataFrame) -> dict[str, float]:
+        ok = part[part.assembly_success == 1]
+        held = part[part.grasp_success == 1]
+        return {
+            "episodes": int(len(part)),
+            "grasp_success": float(part.grasp_success.mean()) if len(part) else float("nan"),
+            "assembly_success": float(part.assembly_success.mean()) if len(part) else float("nan"),
+            "assembly_time_mean_s": float(ok.assembly_time_s.mean()) if len(ok) else float("nan"),
+            "abs_offset_mean_mm": float(held.grasp_offset_mm.abs().mean()) if len(held)
+            else float("nan"),
+            "reward_mean": float(part.reward.mean()) if len(part) else float("nan"),
+        }
+
+    return {"random_phase": stats(df[df.episode < random_episodes]),
+            "last_window": stats(df[df.episode >= df.episode.max() + 1 - window])}
+
+
+def plot_curves(run_dirs: list[Path], out: Path, window: int = 20) -> dict[str, dict]:
+    """Write the figure; return ``{run name: summary}``."""
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7.5))
+    (ax_g, ax_t), (ax_r, ax_o) = axes
+    summaries: dict[str, dict] = {}
+    offsets = []
+    for run in run_dirs:
+        df, meta = load_episodes(run)
+        mode = meta["mode"]
+        random_episodes = int(meta["config"]["agent"]["random_episodes"])
+        label = f"{mode} ({run.name})"
+        summaries[label] = summarize(df, random_episodes, window)
+        roll = df.rolling(window, min_periods=max(1, window // 2))
+        ax_g.plot(df.episode, roll.grasp_success.mean(), label=label)
+        times = df.assembly_time_s.where(df.assembly_success == 1)
+        ax_t.plot(df.episode, times.rolling(window, min_periods=3).mean(), label=label)
+        ax_r.plot(df.episode, roll.reward.mean(), label=label)
+        held = df[df.grasp_success == 1]
+        offsets.append((label + ", random phase",
+                        held[held.episode < random_episodes].grasp_offset_mm.abs()))
+        offsets.append((label + f", last {window}",
+                        held[held.episode >= df.episode.max() + 1 - window].grasp_offset_mm.abs()))
+        for ax in (ax_g, ax_t, ax_r):
+            ax.axvline(random_episodes, color="grey", ls=":", lw=1)
+    ax_g.set_ylabel(f"grasp success (moving mean, {window})")
+    ax_t.set_ylabel(f"assembly time [s] (successful, moving mean {window})")
+    ax_r.set_ylabel(f"reward (moving mean, {window})")
+    for ax in (ax_g, ax_t, ax_r):
+        ax.set_xlabel("episode (dotted: end of random exploration)")
+        ax.legend(fontsize=8)
+    bins = np.linspace(0, 50, 11)
+    for label, values in offsets:
+        if len(values):
+            ax_o.hist(values, bins=bins, histtype="step", lw=1.5, density=True,
+                      label=f"{label} (n={len(values)})")
+    ax_o.set_xlabel("|grasp offset from the centre of mass| [mm] (ground truth)")
+    ax_o.set_ylabel("density")
+    ax_o.legend(fontsize=7)
+    fig.tight_layout()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return summaries
