@@ -53,7 +53,13 @@ def summarize(df: pd.DataFrame, random_episodes: int, window: int) -> dict[str, 
 
 
 def plot_curves(run_dirs: list[Path], out: Path, window: int = 20) -> dict[str, dict]:
-    """Write the figure; return ``{run name: summary}``."""
+    """Write the figure; return ``{run name: summary}``.
+
+    Raises:
+        ConfigError: On a window < 1 or a folder without a run.
+    """
+    if window < 1:
+        raise ConfigError("window", f"must be >= 1, got {window}")
     fig, axes = plt.subplots(2, 2, figsize=(11, 7.5))
     (ax_g, ax_t), (ax_r, ax_o) = axes
     summaries: dict[str, dict] = {}
@@ -67,7 +73,7 @@ def plot_curves(run_dirs: list[Path], out: Path, window: int = 20) -> dict[str, 
         roll = df.rolling(window, min_periods=max(1, window // 2))
         ax_g.plot(df.episode, roll.grasp_success.mean(), label=label)
         times = df.assembly_time_s.where(df.assembly_success == 1)
-        ax_t.plot(df.episode, times.rolling(window, min_periods=3).mean(), label=label)
+        ax_t.plot(df.episode, times.rolling(window, min_periods=min(3, window)).mean(), label=label)
         ax_r.plot(df.episode, roll.reward.mean(), label=label)
         held = df[df.grasp_success == 1]
         offsets.append((label + ", random phase",
