@@ -198,14 +198,22 @@ def cmd_export_scene(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     return 0
 
 
+def flag_overrides(cfg: ExperimentConfig, args: argparse.Namespace,
+                   fields: dict[str, str]) -> ExperimentConfig:
+    """Apply the command's own flags (``{flag name: dotted config path}``) that were given."""
+    for flag, path in fields.items():
+        value = getattr(args, flag)
+        if value is not None:
+            cfg = apply_override(cfg, path, value)
+    return cfg
+
+
 def cmd_model_info(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     """Parameter counts and tensor shapes of the grasp network."""
     from vgs.grasping.network import format_model_info, model_info
 
-    if args.backbone is not None:
-        cfg = apply_override(cfg, "network.backbone", args.backbone)
-    if args.rotations is not None:
-        cfg = apply_override(cfg, "network.num_rotations", args.rotations)
+    cfg = flag_overrides(cfg, args, {"backbone": "network.backbone",
+                                     "rotations": "network.num_rotations"})
     info = model_info(cfg.network, rotate=args.rotate, size=args.size)
     print(json.dumps(info, indent=2) if args.json else format_model_info(info))
     return 0
@@ -215,14 +223,9 @@ def cmd_train(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     """Train (or resume) the VGS or baseline grasp policy."""
     from vgs.experiments.train import train
 
-    if args.episodes is not None:
-        cfg = apply_override(cfg, "train.episodes", args.episodes)
-    if args.backbone is not None:
-        cfg = apply_override(cfg, "network.backbone", args.backbone)
-    if args.seed is not None:
-        cfg = apply_override(cfg, "seed", args.seed)
-    if args.device is not None:
-        cfg = apply_override(cfg, "train.device", args.device)
+    cfg = flag_overrides(cfg, args, {"episodes": "train.episodes",
+                                     "backbone": "network.backbone", "seed": "seed",
+                                     "device": "train.device"})
     out = train(cfg, args.mode, Path(args.out), progress=not args.no_progress)
     print(f"run in {out}: episodes.csv, tensorboard/, checkpoint.pt")
     return 0

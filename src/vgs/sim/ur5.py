@@ -187,8 +187,8 @@ def _add_link_visual(body: mujoco.MjsBody, i: int) -> None:
     grey = [0.7, 0.72, 0.75, 1]
     kw = dict(contype=0, conaffinity=0, group=1, mass=0, rgba=grey)
     cap = mujoco.mjtGeom.mjGEOM_CAPSULE
-    # Joint axis of this body is along R^T e_z at -R^T t; draw a stub there and a link along
-    # its extent (from the previous frame's origin to this frame's origin).
+    # The joint sits at -R^T t in this body: draw the link from there to this frame's origin,
+    # or a short capsule at the origin when both coincide.
     S = _static_part(i)
     R, t = S[:3, :3], S[:3, 3]
     p_prev = -R.T @ t
