@@ -1,0 +1,201 @@
+"""Speed of the simulated cell: physics steps per second, real-time factor, controller overhead.
+
+Run: ``.venv/bin/python benchmarks/bench_cell.py [--episodes 5] [--steps 5000]``.
+
+Prints, for one process pinned to one CPU core:
+
+* physics steps per second of the full cell (``mujoco.mj_step`` only) with the robot holding
+  still at home, and during whole assemblies;
+* the real-time factor of whole episodes (look, grasp, assemble, release): simulated seconds
+  divided by wall seconds;
+* the share of wall time spent outside ``mj_step`` (the Python controller, the camera, the
+  bookkeeping), measured by wrapping ``mujoco.mj_step`` with a timer.
+
+Every figure is measured twice: with the wall clock and with this process's CPU time. On an
+idle core the two agree; when other processes share the core, the CPU-time figures are what an
+idle core would give, and the wall-clock ones show the slowdown.
+
+Targets on one core of the project machine: real-time factor >= 20, overhead <= 30 %.
+Figures only, no assertions.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from vgs.assembly.episode import EpisodeRunner, center_policy
+from vgs.config import profile
+from vgs.sim.cell import HOME_Q, Cell
+
+
+@dataclass
+class Clock:
+    """Wall and CPU seconds."""
+
+    wall: float = 0.0
+    cpu: float = 0.0
+
+    def add(self, wall: float, cpu: float) -> None:
+        self.wall += wall
+        self.cpu += cpu
+
+
+@contextmanager
+def measure(clock: Clock) -> Iterator[None]:
+    """Add the wall and CPU time of the block to ``clock``."""
+    w0, c0 = time.perf_counter(), time.process_time()
+    try:
+        yield
+    finally:
+        clock.add(time.perf_counter() - w0, time.process_time() - c0)
+
+
+@dataclass
+class StepTimer:
+    """Time and number of physics steps spent in ``mujoco.mj_step``, and in the camera."""
+
+    physics: Clock = field(default_factory=Clock)
+    camera: Clock = field(default_factory=Clock)
+    steps: int = 0
+    calls: int = 0
+
+
+@contextmanager
+def timed_mj_step(timer: StepTimer) -> Iterator[StepTimer]:
+    """Replace ``mujoco.mj_step`` by a timing wrapper for the duration of the block."""
+    original = mujoco.mj_step
+
+    def wrapper(m: mujoco.MjModel, d: mujoco.MjData, nstep: int = 1) -> None:
+        with measure(timer.physics):
+            original(m, d, nstep)
+        timer.steps += nstep
+        timer.calls += 1
+
+    mujoco.mj_step = wrapper
+    try:
+        yield timer
+    finally:
+        mujoco.mj_step = original
+
+
+def pin_to_one_core() -> str:
+    """Restrict this process to one CPU core where the OS allows it."""
+    if hasattr(os, "sched_setaffinity"):
+        core = min(os.sched_getaffinity(0))
+        os.sched_setaffinity(0, {core})
+        return f"pinned to core {core}"
+    return "not pinned (no sched_setaffinity)"
+
+
+def steps_holding_still(steps: int) -> Clock:
+    """Time of ``steps`` physics steps with the arm servoed at home and the peg on the table."""
+    cfg = profile("paper")
+    cell = Cell(cfg.cell, cfg.controller.joint_kp, cfg.controller.joint_kv)
+    cell.reset(np.random.default_rng(0))
+    m, d = cell.model, cell.data
+    d.ctrl[cell.ids.arm_act] = HOME_Q
+    mujoco.mj_step(m, d, 200)  # settle
+    clock = Clock()
+    with measure(clock):
+        for _ in range(steps):
+            mujoco.mj_step(m, d)
+    return clock
+
+
+def _timed(fn: Callable[..., Any], clock: Clock) -> Callable[..., Any]:
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        with measure(clock):
+            return fn(*args, **kwargs)
+
+    return wrapper
+
+
+@dataclass(frozen=True)
+class AssemblyTiming:
+    """Where the time of whole episodes went."""
+
+    episodes: int
+    successes: int
+    sim_s: float
+    total: Clock
+    timer: StepTimer
+
+
+def assemblies(episodes: int, profile_name: str, seed: int) -> AssemblyTiming:
+    """Run whole episodes (centre grasp) in this process and time them."""
+    cfg = profile(profile_name)
+    runner = EpisodeRunner(cfg)
+    _, camera = runner.cell(cfg.cell.peg)  # compile outside the timing
+    timer = StepTimer()
+    camera.capture = _timed(camera.capture, timer.camera)
+    total = Clock()
+    sim = 0.0
+    successes = 0
+    with timed_mj_step(timer):
+        for k in range(episodes):
+            with measure(total):
+                record, robot, _ = runner.run(seed + k, center_policy())
+            sim += robot.time
+            successes += int(record.success)
+    return AssemblyTiming(episodes, successes, sim, total, timer)
+
+
+def report(still: Clock, steps: int, r: AssemblyTiming, timestep: float) -> None:
+    """Print the figures, CPU-time based and wall-clock based."""
+    t = r.timer
+    print(f"{'':40s}{'CPU time':>12s}{'wall clock':>12s}")
+
+    def line(label: str, cpu: float, wall: float, fmt: str, note: str = "") -> None:
+        print(f"{label:40s}{cpu:>12{fmt}}{wall:>12{fmt}}  {note}")
+
+    line("mj_step, holding still [steps/s]", steps / still.cpu, steps / still.wall, ",.0f",
+         f"({steps / still.cpu * timestep:.0f} x real time)")
+    line("mj_step, during assemblies [steps/s]", t.steps / t.physics.cpu,
+         t.steps / t.physics.wall, ",.0f",
+         f"({t.steps / t.physics.cpu * timestep:.0f} x real time)")
+    line("real-time factor of whole episodes", r.sim_s / r.total.cpu, r.sim_s / r.total.wall,
+         ".1f", "(target >= 20)")
+    line("time outside mj_step [%]", 100 * (1 - t.physics.cpu / r.total.cpu),
+         100 * (1 - t.physics.wall / r.total.wall), ".1f", "(target <= 30 %)")
+    line("  of which camera ray casting [%]", 100 * t.camera.cpu / r.total.cpu,
+         100 * t.camera.wall / r.total.wall, ".1f")
+    rest_cpu = r.total.cpu - t.physics.cpu - t.camera.cpu
+    rest_wall = r.total.wall - t.physics.wall - t.camera.wall
+    line("  Python per control tick [us]", 1e6 * rest_cpu / t.calls, 1e6 * rest_wall / t.calls,
+         ".0f", f"over {t.calls:,} ticks")
+    print(f"episodes: {r.episodes} ({r.successes} assembled), {r.sim_s:.1f} s simulated, "
+          f"{r.total.cpu:.1f} s CPU, {r.total.wall:.1f} s wall")
+    if r.total.wall > 1.1 * r.total.cpu:
+        print("note: wall clock > 1.1 x CPU time: other processes shared the core")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--episodes", type=int, default=5, help="whole episodes to time")
+    parser.add_argument("--steps", type=int, default=5000, help="steps of the still benchmark")
+    parser.add_argument("--profile", default="paper")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--all-cores", action="store_true", help="do not pin to one core")
+    args = parser.parse_args()
+    pinned = "not pinned" if args.all_cores else pin_to_one_core()
+    cfg = profile(args.profile)
+    print(f"vgs cell benchmark: mujoco {mujoco.__version__}, {platform.machine()}, {pinned}, "
+          f"time step {1000 * cfg.cell.sim.timestep:g} ms, control every "
+          f"{cfg.cell.sim.control_decimation} steps")
+    still = steps_holding_still(args.steps)
+    timing = assemblies(args.episodes, args.profile, args.seed)
+    report(still, args.steps, timing, cfg.cell.sim.timestep)
+
+
+if __name__ == "__main__":
+    main()
