@@ -202,7 +202,8 @@ class GraspAgent:
         device: Torch device string (``"cpu"`` or ``"cuda"``).
         seed: Seed of the network initialisation (the global torch RNG is left untouched).
         rotate: Rotation mode of :class:`GraspQNetwork` (``"input"`` or ``"features"``).
-        channels_last: Channels-last memory format for the networks.
+        channels_last: Channels-last memory format for the networks (default: on; 1.2-1.5x
+            faster decisions on a 2-core CPU, see docs/grasping.md; same values up to rounding).
 
     Attributes:
         eva_net: Evaluation network Q_eva.
@@ -218,7 +219,7 @@ class GraspAgent:
         device: str = "cpu",
         seed: int = 0,
         rotate: str = "input",
-        channels_last: bool = False,
+        channels_last: bool = True,
     ) -> None:
         self.network_cfg = network_cfg
         self.agent_cfg = agent_cfg
