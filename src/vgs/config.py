@@ -380,7 +380,8 @@ class NetworkConfig:
 
     Attributes:
         backbone: ``densenet121`` (paper) or ``light`` (fast CPU runs).
-        num_rotations: Number of grasp orientations R over 180 degrees.
+        num_rotations: Number of grasp orientations R over 360 degrees, theta_k = 2 pi k / R
+            (k and k + R/2 are the same two-finger grasp).
         weights: Optional path of a local weights file for the trunks.
         depth_mean: Mean subtracted from the depth heightmap [m].
         depth_std: Scale dividing the depth heightmap [m].
