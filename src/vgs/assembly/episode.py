@@ -144,7 +144,7 @@ class EpisodeRunner:
             return record, robot, hm
         nominal = self.cfg.cell.peg
         module = AssemblyModule(robot, self.cfg.assembly, nominal, self.cfg.cell.hole.nominal_xy,
-                                self.cfg.cell.hole.depth, self.cfg.cell.hole.clearance)
+                                self.cfg.cell.hole.depth)
         module.run(record)
         self._ground_truth(cell, record)
         return record, robot, hm

@@ -90,18 +90,15 @@ class AssemblyModule:
         nominal_peg: Nominal peg data (the product drawing the controller knows).
         nominal_hole_xy: Nominal hole centre (the fixture drawing) [m].
         hole_surface_z: Nominal height of the hole's top face [m].
-        clearance: Nominal diametral clearance [m] (sets delta = arctan(clearance / K)).
     """
 
     def __init__(self, robot: Robot, cfg: AssemblyConfig, nominal_peg: PegConfig,
-                 nominal_hole_xy: tuple[float, float], hole_surface_z: float,
-                 clearance: float) -> None:
+                 nominal_hole_xy: tuple[float, float], hole_surface_z: float) -> None:
         self.robot = robot
         self.cfg = cfg
         self.peg = nominal_peg
         self.hole_xy = np.asarray(nominal_hole_xy, dtype=float)
         self.surface_z = hole_surface_z
-        self.delta = math.atan(clearance / cfg.insertion_depth)  # paper eq. 1
         self.adjustments = 0
         self.retries = 0
         self.phase_start = 0.0
@@ -294,7 +291,6 @@ class AssemblyModule:
         adm = robot.arm.admittance
         robot.arm.absorb_offset()
         lead = self.low_rim_from_tcp[:2] / max(np.linalg.norm(self.low_rim_from_tcp[:2]), 1e-9)
-        self.lead = lead
         adm.set_stiffness(np.array([0.0, 0.0, 0.0, *[self.robot.cfg.rot_stiffness * 10] * 3]))
         adm.wrench_des[:3] = [*(cfg.three_point_force * lead), -cfg.press_force]
         still = 0.0
