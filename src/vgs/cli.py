@@ -1,4 +1,5 @@
-"""The ``vgs`` command: ``demo``, ``sweep``, ``export-scene`` and ``model-info``.
+"""The ``vgs`` command: ``demo``, ``sweep``, ``export-scene``, ``model-info``, ``train``,
+``heatmap``, ``curves``, ``evaluate``, ``reproduce`` and ``report``.
 
 Every command takes ``--profile`` and configuration overrides (``--peg-mass`` ... and the generic
 ``--set key=value`` with a dotted path into :class:`vgs.config.ExperimentConfig`). Bad input,
@@ -148,14 +149,7 @@ def cmd_demo(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
 
 def cmd_sweep(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     """Grasp-offset sweep: DIR/sweep.csv, DIR/sweep.png and DIR/summary.json."""
-    from vgs.experiments.plots import sweep_figure
-    from vgs.experiments.sweep import (
-        SweepSpec,
-        default_offsets,
-        run_sweep,
-        summarize,
-        write_csv,
-    )
+    from vgs.experiments.sweep import SweepSpec, default_offsets, sweep_to_folder
 
     if args.offsets_mm is not None:
         offsets = _float_list_mm(args.offsets_mm)
@@ -165,18 +159,7 @@ def cmd_sweep(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
                      length_range=args.length_range,
                      seed=cfg.seed if args.seed is None else args.seed)
     out = Path(args.out)
-    rows = run_sweep(cfg, spec, workers=args.workers)
-    out.mkdir(parents=True, exist_ok=True)
-    write_csv(rows, out / "sweep.csv")
-    ranges = (f"mass +-{100 * spec.mass_range:g} %, length +-{100 * spec.length_range:g} %"
-              if spec.mass_range or spec.length_range else "nominal peg")
-    sweep_figure(rows, cfg, out / "sweep.png",
-                 title=f"{len(rows)} episodes, {spec.trials} per offset, {ranges}")
-    summary = summarize(rows)
-    doc = {"profile": cfg.name, "seed": spec.seed, "trials": spec.trials,
-           "mass_range": spec.mass_range, "length_range": spec.length_range,
-           "offsets": summary}
-    (out / "summary.json").write_text(json.dumps(_json_safe(doc), indent=2) + "\n")
+    summary = sweep_to_folder(cfg, spec, out, workers=args.workers)
     print(f"{'offset [mm]':>11}  {'n':>3}  {'success':>7}  {'mean [s]':>8}  {'std [s]':>7}  "
           f"{'min [s]':>7}  {'max [s]':>7}")
     for s in summary:
@@ -213,8 +196,9 @@ def cmd_model_info(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     from vgs.grasping.network import format_model_info, model_info
 
     cfg = flag_overrides(cfg, args, {"backbone": "network.backbone",
-                                     "rotations": "network.num_rotations"})
-    info = model_info(cfg.network, rotate=args.rotate, size=args.size)
+                                     "rotations": "network.num_rotations",
+                                     "rotate": "network.rotate"})
+    info = model_info(cfg.network, rotate=cfg.network.rotate, size=args.size)
     print(json.dumps(info, indent=2) if args.json else format_model_info(info))
     return 0
 
@@ -256,6 +240,59 @@ def cmd_curves(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
                   f"{s['assembly_success']:>8.2f} {s['assembly_time_mean_s']:>7.1f} "
                   f"{s['abs_offset_mean_mm']:>8.1f} {s['reward_mean']:>6.3f}")
     print(f"wrote {args.out}")
+    return 0
+
+
+def cmd_evaluate(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
+    """Evaluate one policy on one condition: DIR/episodes.parquet, .csv and summary.json."""
+    from vgs.experiments.evaluate import EvalSpec, evaluate, summarize
+
+    episodes = cfg.eval.episodes if args.episodes is None else args.episodes
+    spec = EvalSpec(args.policy, args.condition, episodes,
+                    cfg.reproduce.eval_seed if args.seed is None else args.seed)
+    df = evaluate(cfg, spec, Path(args.out), workers=args.workers, backend=args.backend,
+                  ray_address=args.ray_address, progress=not args.no_progress)
+    s = summarize(df)
+    if args.json:
+        print(json.dumps(_json_safe(s), indent=2))
+        return 0
+    print(f"{df['policy'].iloc[0]} / {args.condition}: {s['episodes']} episodes, success "
+          f"{s['success_rate']:.1%}, grasp {s['grasp_success_rate']:.1%}")
+    if s["time_mean_s"] is not None:
+        print(f"assembly time [s]: mean {s['time_mean_s']:.2f}, std {s['time_std_s']:.2f}, "
+              f"min {s['time_min_s']:.2f}, max {s['time_max_s']:.2f}; total "
+              f"{s['time_total_h']:.3f} h")
+    if s["failure_reasons"]:
+        print("failures: " + ", ".join(f"{k} x{v}" for k, v in s["failure_reasons"].items()))
+    print(f"wrote {Path(args.out) / 'episodes.parquet'} (and .csv, summary.json)")
+    return 0
+
+
+def cmd_reproduce(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
+    """Train both policies, evaluate them on the three conditions, sweep, report."""
+    from vgs.experiments.reproduce import Reproduction
+
+    rep = Reproduction(cfg, Path(args.out), workers=args.workers, backend=args.backend,
+                       ray_address=args.ray_address, progress=not args.no_progress)
+    stages = {"train": rep.train, "evaluate": rep.evaluate, "sweep": rep.sweep}
+    for name in args.stages.split(","):
+        if name == "report":
+            continue
+        if name not in stages:
+            raise ConfigError("stages", f"unknown stage {name!r}; choose from train, evaluate, "
+                                        "sweep, report")
+        stages[name]()
+    path = rep.report()
+    print(f"wrote {path} and {path.with_suffix('.html')}")
+    return 0
+
+
+def cmd_report(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
+    """Build DIR/report.md and DIR/report.html from the results in DIR."""
+    from vgs.experiments.report import build_report
+
+    path = build_report(Path(args.dir))
+    print(f"wrote {path} and {path.with_suffix('.html')}")
     return 0
 
 
@@ -332,7 +369,7 @@ def build_parser() -> argparse.ArgumentParser:
                           help="parameter counts and tensor shapes of the grasp network")
     info.add_argument("--backbone", help="densenet121 or light (default: the profile's)")
     info.add_argument("--rotations", type=int, help="number of grasp rotations R")
-    info.add_argument("--rotate", default="input", help="input or features (default: input)")
+    info.add_argument("--rotate", help="input or features (default: the profile's)")
     info.add_argument("--size", type=int, default=224, help="heightmap side [px]")
     info.add_argument("--json", action="store_true", help="print JSON")
     info.set_defaults(func=cmd_model_info)
@@ -363,7 +400,47 @@ def build_parser() -> argparse.ArgumentParser:
     curves.add_argument("--window", type=int, default=20, help="moving-mean window [episodes]")
     curves.add_argument("--json", action="store_true", help="print the summary as JSON")
     curves.set_defaults(func=cmd_curves)
+
+    evaluate = sub.add_parser("evaluate", parents=[common],
+                              help="test one policy on one condition (parallel, resumable)")
+    evaluate.add_argument("--policy", required=True,
+                          help="a training run folder, random, center, or module:function")
+    evaluate.add_argument("--condition", default="nominal", choices=("nominal", "mass", "length"),
+                          help="nominal peg, mass +-15 %%, or length 85-115 %% with the mass "
+                               "following (default: %(default)s)")
+    evaluate.add_argument("--episodes", type=int,
+                          help="test episodes (default: the profile's eval.episodes)")
+    evaluate.add_argument("--seed", type=int,
+                          help="root seed of the test scenes (default: reproduce.eval_seed)")
+    _parallel_flags(evaluate)
+    evaluate.add_argument("--out", required=True, help="output folder (started again: resumes)")
+    evaluate.add_argument("--json", action="store_true", help="print the summary as JSON")
+    evaluate.set_defaults(func=cmd_evaluate)
+
+    repro = sub.add_parser("reproduce", parents=[common],
+                           help="the paper's experiments: train, evaluate, sweep, report")
+    repro.add_argument("--out", required=True, help="output folder (started again: resumes)")
+    repro.add_argument("--stages", default="train,evaluate,sweep,report",
+                       help="comma-separated stages to run (default: %(default)s; the report "
+                            "is always written)")
+    _parallel_flags(repro)
+    repro.set_defaults(func=cmd_reproduce)
+
+    report = sub.add_parser("report", parents=[common],
+                            help="write DIR/report.md and DIR/report.html from DIR's results")
+    report.add_argument("dir", help="a reproduce folder (with eval/<policy>/<condition>/)")
+    report.set_defaults(func=cmd_report)
     return parser
+
+
+def _parallel_flags(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--workers", type=int,
+                   help="parallel worker processes (default: the number of CPU cores)")
+    p.add_argument("--backend", default="local", choices=("local", "ray"),
+                   help="local processes or Ray (pip install 'vgs[ray]') (default: local)")
+    p.add_argument("--ray-address", help="address of a running Ray cluster (default: start a "
+                                         "local one)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -372,6 +372,7 @@ class AssemblyConfig:
 # ----------------------------------------------------------------------------------------------
 
 BACKBONES = ("densenet121", "light")
+ROTATE_MODES = ("input", "features")
 
 
 @dataclass(frozen=True)
@@ -383,6 +384,9 @@ class NetworkConfig:
         num_rotations: Number of grasp orientations R over 360 degrees, theta_k = 2 pi k / R
             (k and k + R/2 are the same two-finger grasp).
         weights: Optional path of a local weights file for the trunks.
+        rotate: ``input`` (rotate the heightmap R times before the trunks, as VPG and the paper
+            do) or ``features`` (trunks run once, orientation handled after them; about 14x
+            faster decisions with DenseNet-121 on a CPU, see docs/grasping.md; not in the paper).
         depth_mean: Mean subtracted from the depth heightmap [m].
         depth_std: Scale dividing the depth heightmap [m].
     """
@@ -390,6 +394,7 @@ class NetworkConfig:
     backbone: str = "densenet121"
     num_rotations: int = 16
     weights: str | None = None
+    rotate: str = "input"
     depth_mean: float = 0.01
     depth_std: float = 0.03
 
@@ -399,6 +404,9 @@ class NetworkConfig:
                               f"must be one of {BACKBONES}, got {self.backbone!r}")
         if self.num_rotations < 1:
             raise ConfigError("network.num_rotations", "must be >= 1")
+        if self.rotate not in ROTATE_MODES:
+            raise ConfigError("network.rotate",
+                              f"must be one of {ROTATE_MODES}, got {self.rotate!r}")
         _positive(self, "depth_std", prefix="network.")
 
 
@@ -509,6 +517,43 @@ class EvalConfig:
 
 
 @dataclass(frozen=True)
+class ReproduceConfig:
+    """What ``vgs reproduce`` runs besides one training per mode and the evaluations.
+
+    Attributes:
+        train_seeds: Root seeds of the training runs; each seed trains the baseline and VGS
+            (the paper reports one run per method).
+        conditions: Test conditions (``nominal``, ``mass``, ``length``; paper 4.2).
+        reference_policies: Extra heuristic policies evaluated beside the learned ones
+            (``center``, ``random``).
+        sweep_offsets: Grasp offsets of the grasp-position sweep (0: no sweep).
+        sweep_trials: Trials per offset of the sweep.
+        eval_seed: Root seed of the test episodes (the same scenes for every policy).
+    """
+
+    train_seeds: tuple[int, ...] = (0,)
+    conditions: tuple[str, ...] = ("nominal", "mass", "length")
+    reference_policies: tuple[str, ...] = ("center",)
+    sweep_offsets: int = 9
+    sweep_trials: int = 20
+    eval_seed: int = 2023
+
+    def __post_init__(self) -> None:
+        if not self.train_seeds:
+            raise ConfigError("reproduce.train_seeds", "need at least one seed")
+        bad = [c for c in self.conditions if c not in ("nominal", "mass", "length")]
+        if bad or not self.conditions:
+            raise ConfigError("reproduce.conditions",
+                              f"must be a non-empty subset of nominal, mass, length; got {bad}")
+        bad = [p for p in self.reference_policies if p not in ("center", "random")]
+        if bad:
+            raise ConfigError("reproduce.reference_policies",
+                              f"must be center and/or random, got {bad}")
+        if self.sweep_offsets < 0 or self.sweep_trials < 1:
+            raise ConfigError("reproduce.sweep_offsets", "offsets >= 0 and trials >= 1")
+
+
+@dataclass(frozen=True)
 class ExperimentConfig:
     """Everything one experiment needs."""
 
@@ -522,6 +567,7 @@ class ExperimentConfig:
     reward: RewardConfig = field(default_factory=RewardConfig)
     train: TrainConfig = field(default_factory=TrainConfig)
     eval: EvalConfig = field(default_factory=EvalConfig)
+    reproduce: ReproduceConfig = field(default_factory=ReproduceConfig)
 
 
 def _paper() -> ExperimentConfig:

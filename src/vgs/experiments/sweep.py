@@ -218,6 +218,42 @@ def write_csv(rows: Sequence[dict[str, Any]], path: str | Path) -> Path:
     return path
 
 
+def sweep_to_folder(cfg: ExperimentConfig, spec: SweepSpec, out: Path,
+                    workers: int | None = None, progress: bool = True) -> list[dict[str, Any]]:
+    """Run the sweep and write ``out/sweep.csv``, ``out/sweep.png`` and ``out/summary.json``.
+
+    Returns:
+        The per-offset summary (:func:`summarize`).
+    """
+    import json
+
+    from vgs.experiments.plots import sweep_figure
+
+    rows = run_sweep(cfg, spec, workers=workers, progress=progress)
+    out.mkdir(parents=True, exist_ok=True)
+    write_csv(rows, out / "sweep.csv")
+    ranges = (f"mass +-{100 * spec.mass_range:g} %, length +-{100 * spec.length_range:g} %"
+              if spec.mass_range or spec.length_range else "nominal peg")
+    sweep_figure(rows, cfg, out / "sweep.png",
+                 title=f"{len(rows)} episodes, {spec.trials} per offset, {ranges}")
+    summary = summarize(rows)
+    doc = {"profile": cfg.name, "seed": spec.seed, "trials": spec.trials,
+           "mass_range": spec.mass_range, "length_range": spec.length_range,
+           "offsets": summary}
+    (out / "summary.json").write_text(json.dumps(_json_safe(doc), indent=2) + "\n")
+    return summary
+
+
+def _json_safe(value: Any) -> Any:
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _json_safe(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_json_safe(v) for v in value]
+    return value
+
+
 def _stat(values: np.ndarray, fn: Any) -> float | None:
     return float(fn(values)) if values.size else None
 

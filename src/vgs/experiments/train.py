@@ -129,8 +129,17 @@ def save_checkpoint(path: Path, agent: GraspAgent, replay: ReplayBuffer, state: 
     os.replace(tmp, path)
 
 
-def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True) -> Path:
+def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
+          threads: int | None = None, position: int = 0) -> Path:
     """Train (or resume) one policy; return the run directory.
+
+    Args:
+        cfg: Experiment configuration (ignored on resume: the run's saved one is used).
+        mode: ``vgs`` or ``baseline``.
+        out: Run folder.
+        progress: Show a progress bar.
+        threads: Torch CPU threads (default: up to 4, at most the number of cores).
+        position: Line of the progress bar (several runs side by side).
 
     Raises:
         ConfigError: On an unknown mode or a run directory made with another mode.
@@ -151,7 +160,7 @@ def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True) ->
                                          "torch": torch.__version__}, indent=2))
     total = cfg.train.episodes
     device = resolve_device(cfg.train.device)
-    torch.set_num_threads(max(1, min(4, os.cpu_count() or 1)))
+    torch.set_num_threads(threads or max(1, min(4, os.cpu_count() or 1)))
     agent = GraspAgent(cfg.network, cfg.agent, device=device, seed=cfg.seed)
     replay = ReplayBuffer(cfg.agent.replay_capacity)
     monitor = DeltaQMonitor.from_config(cfg.agent)
@@ -176,7 +185,8 @@ def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True) ->
     csv_file, table = _open_csv(out / "episodes.csv", state.episode)
     runner = EpisodeRunner(cfg)
     bar = tqdm(range(state.episode, total), initial=state.episode, total=total,
-               desc=f"train {mode}", disable=not progress, dynamic_ncols=True)
+               desc=f"train {mode}", disable=not progress, dynamic_ncols=True,
+                position=position)
     recent: list[tuple[bool, float]] = []
     try:
         for episode in bar:

@@ -201,7 +201,8 @@ class GraspAgent:
         agent_cfg: Learning rate, momentum, weight decay, gamma, exploration, target period.
         device: Torch device string (``"cpu"`` or ``"cuda"``).
         seed: Seed of the network initialisation (the global torch RNG is left untouched).
-        rotate: Rotation mode of :class:`GraspQNetwork` (``"input"`` or ``"features"``).
+        rotate: Rotation mode of :class:`GraspQNetwork` (``"input"`` or ``"features"``);
+            default: ``network_cfg.rotate``.
         channels_last: Channels-last memory format for the networks (default: on; 1.2-1.5x
             faster decisions on a 2-core CPU, see docs/grasping.md; same values up to rounding).
 
@@ -218,16 +219,16 @@ class GraspAgent:
         agent_cfg: AgentConfig,
         device: str = "cpu",
         seed: int = 0,
-        rotate: str = "input",
+        rotate: str | None = None,
         channels_last: bool = True,
     ) -> None:
         self.network_cfg = network_cfg
         self.agent_cfg = agent_cfg
         self.device = torch.device(device)
-        self.rotate = rotate
+        self.rotate = network_cfg.rotate if rotate is None else rotate
         with torch.random.fork_rng(devices=[]):
             torch.manual_seed(seed)
-            net = GraspQNetwork(network_cfg, rotate=rotate, channels_last=channels_last)
+            net = GraspQNetwork(network_cfg, rotate=self.rotate, channels_last=channels_last)
         self.eva_net = net.to(self.device)
         self.target_net = copy.deepcopy(self.eva_net).eval()
         for p in self.target_net.parameters():

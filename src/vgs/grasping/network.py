@@ -189,8 +189,8 @@ class GraspQNetwork(nn.Module):
 
     Args:
         cfg: Backbone, number of rotations R, optional trunk weights, depth normalisation.
-        rotate: ``"input"`` (rotate the heightmap, VPG, default) or ``"features"`` (trunks run
-            once; the head is conditioned on the angle).
+        rotate: ``"input"`` (rotate the heightmap, VPG) or ``"features"`` (trunks run
+            once; the head is conditioned on the angle); default: ``cfg.rotate``.
         memory_efficient: Gradient checkpointing inside DenseNet-121's dense layers.
         channels_last: Store convolution weights and trunk inputs in channels-last memory
             format (faster on CPU with oneDNN; results unchanged up to rounding).
@@ -202,11 +202,12 @@ class GraspQNetwork(nn.Module):
     def __init__(
         self,
         cfg: NetworkConfig,
-        rotate: str = "input",
+        rotate: str | None = None,
         memory_efficient: bool = False,
         channels_last: bool = False,
     ) -> None:
         super().__init__()
+        rotate = cfg.rotate if rotate is None else rotate
         if rotate not in ROTATE_MODES:
             raise ConfigError("network.rotate", f"must be one of {ROTATE_MODES}, got {rotate!r}")
         self.cfg = cfg

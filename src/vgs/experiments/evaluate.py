@@ -1,0 +1,393 @@
+"""Evaluation at scale: one policy, one test condition, N seeded episodes, local or Ray workers.
+
+Episode ``i`` of a run with root seed ``S`` is fully determined by ``(S, i)`` and the policy:
+
+* the episode seed (peg pose, hole displacement, sensor noise) is the first word of
+  ``numpy.random.SeedSequence([S, i, EVAL_STREAM])`` (the tag keeps test scenes apart from the
+  training scenes ``SeedSequence([S, i])`` of a run with the same root seed);
+* a child of that sequence draws the peg of the condition (paper 4.2):
+
+  - ``nominal``: the configured peg (30 mm x 100 mm, 0.55 kg);
+  - ``mass``: ``m = m0 * U(1 - a, 1 + a)`` with ``a = eval.mass_range`` (0.15);
+  - ``length``: ``L = L0 * U(1 - b, 1 + b)`` with ``b = eval.length_range`` (0.15) and the mass
+    following the volume, ``m = m0 * L / L0``;
+
+* the policy's own random draws (the ``random`` policy) use ``default_rng([episode seed, 2])``.
+
+So the same seed gives the same table whatever the backend, the worker count and the order in
+which workers finish, and two policies evaluated with the same seed meet the same scenes (a
+paired comparison). Worker processes run torch on one thread, so network outputs are identical
+in every process.
+
+Failures never stop a run: an exception inside an episode becomes a row with
+``failure_reason = "error:<type>: <message>"``; a worker process that dies takes its episode
+with it, the pool is rebuilt and the episode is tried again, up to :data:`MAX_ATTEMPTS` times
+(then ``failure_reason = "worker_lost"``).
+
+Resume: every finished row is appended to ``journal.jsonl`` at once; started again with the same
+``--out`` the run skips the episodes already there. At the end ``episodes.parquet``,
+``episodes.csv`` and ``summary.json`` are written.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import multiprocessing as mp
+import os
+import time
+from collections.abc import Callable, Generator, Iterator
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from tqdm import tqdm
+
+from vgs.assembly.episode import EpisodeRunner
+from vgs.assembly.record import EpisodeRecord
+from vgs.config import ExperimentConfig, PegConfig, to_dict
+from vgs.errors import ConfigError, VGSError
+from vgs.experiments.policies import EvalPolicy, load_policy, policy_label
+
+CONDITIONS = ("nominal", "mass", "length")
+BACKENDS = ("local", "ray")
+MAX_ATTEMPTS = 3
+EVAL_STREAM = 0xE7A1  # tags the seed sequences of test episodes
+
+
+@dataclass(frozen=True)
+class EvalSpec:
+    """What to evaluate.
+
+    Attributes:
+        policy: Policy spec (:mod:`vgs.experiments.policies`).
+        condition: ``nominal``, ``mass`` or ``length``.
+        episodes: Number of test episodes.
+        seed: Root seed.
+    """
+
+    policy: str
+    condition: str
+    episodes: int
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if self.condition not in CONDITIONS:
+            raise ConfigError("condition", f"must be one of {CONDITIONS}, got {self.condition!r}")
+        if self.episodes < 1:
+            raise ConfigError("episodes", f"must be >= 1, got {self.episodes}")
+
+
+@dataclass(frozen=True)
+class EpisodeTask:
+    """One planned test episode."""
+
+    index: int
+    seed: int
+    peg: PegConfig
+
+
+def plan_episodes(cfg: ExperimentConfig, spec: EvalSpec) -> list[EpisodeTask]:
+    """The episodes of ``spec`` in index order (module docstring)."""
+    nominal = cfg.cell.peg
+    tasks = []
+    for i in range(spec.episodes):
+        seq = np.random.SeedSequence([spec.seed, i, EVAL_STREAM])
+        seed = int(seq.generate_state(1)[0])
+        rng = np.random.default_rng(seq.spawn(1)[0])
+        factor = float(rng.uniform(-1.0, 1.0))
+        peg = nominal
+        if spec.condition == "mass":
+            peg = replace(nominal, mass=nominal.mass * (1.0 + cfg.eval.mass_range * factor))
+        elif spec.condition == "length":
+            scale = 1.0 + cfg.eval.length_range * factor
+            peg = replace(nominal, length=nominal.length * scale, mass=nominal.mass * scale)
+        tasks.append(EpisodeTask(i, seed, peg))
+    return tasks
+
+
+# -- one episode, in whatever process runs it ---------------------------------------------------
+
+
+class EpisodeWorker:
+    """Runs test episodes of one policy; one per worker process (or Ray actor).
+
+    Args:
+        cfg: Experiment configuration.
+        policy: Policy spec.
+    """
+
+    def __init__(self, cfg: ExperimentConfig, policy: str) -> None:
+        import torch
+
+        torch.set_num_threads(1)
+        self.cfg = cfg
+        self.runner = EpisodeRunner(cfg)
+        self.policy: EvalPolicy = load_policy(policy, cfg)
+
+    def run(self, task: EpisodeTask) -> dict[str, Any]:
+        """One episode as a table row; an exception becomes a failure row."""
+        t0 = time.perf_counter()
+        decision: dict[str, Any] = {}
+        rng = np.random.default_rng([task.seed, 2])
+
+        def policy(hm: Any) -> Any:
+            d = self.policy(hm, rng)
+            decision.update(rotation=d.rotation, row=d.row, col=d.col, q_value=d.q_value)
+            return d.command
+
+        try:
+            record, _, _ = self.runner.run(task.seed, policy, peg=task.peg)
+            if record.success and not math.isfinite(record.assembly_time):
+                record.success, record.failure_reason = False, "unstable"
+        except Exception as exc:  # noqa: BLE001 - any failure of one episode is a result row
+            record = EpisodeRecord(seed=task.seed, peg_mass=task.peg.mass,
+                                   peg_length=task.peg.length)
+            message = " ".join(str(exc).split())[:200]
+            record.failure_reason = f"error:{type(exc).__name__}: {message}"
+        row = {"index": task.index, **record.to_row(),
+               "rotation": decision.get("rotation", -1), "row": decision.get("row", -1),
+               "col": decision.get("col", -1), "q_value": decision.get("q_value", math.nan),
+               "wall_s": round(time.perf_counter() - t0, 3)}
+        return row
+
+
+_WORKER: EpisodeWorker | None = None
+
+
+def _init_process(cfg: ExperimentConfig, policy: str) -> None:
+    global _WORKER
+    _WORKER = EpisodeWorker(cfg, policy)
+
+
+def _run_in_process(task: EpisodeTask) -> dict[str, Any]:
+    if _WORKER is None:
+        raise VGSError("evaluation worker used before its initialisation")
+    return _WORKER.run(task)
+
+
+# -- backends ------------------------------------------------------------------------------------
+
+
+def _lost_row(task: EpisodeTask) -> dict[str, Any]:
+    record = EpisodeRecord(seed=task.seed, peg_mass=task.peg.mass, peg_length=task.peg.length)
+    record.failure_reason = "worker_lost"
+    return {"index": task.index, **record.to_row(), "rotation": -1, "row": -1, "col": -1,
+            "q_value": math.nan, "wall_s": math.nan}
+
+
+def _pool_round(cfg: ExperimentConfig, policy: str, queue: list[EpisodeTask], workers: int
+                ) -> Generator[dict[str, Any], None, tuple[list[EpisodeTask], list[EpisodeTask]]]:
+    """Run ``queue`` on a fresh pool, yielding rows as they finish, until done or broken.
+
+    Returns (as the generator's value):
+        The episodes in flight when a worker died (suspects) and those not yet started.
+    """
+    ctx = mp.get_context("spawn")
+    queue = list(queue)
+    futures: dict[Future[dict[str, Any]], EpisodeTask] = {}
+    with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init_process,
+                             initargs=(cfg, policy)) as pool:
+        while queue or futures:
+            while queue and len(futures) < workers:
+                task = queue.pop(0)
+                futures[pool.submit(_run_in_process, task)] = task
+            done, _ = wait(futures, return_when=FIRST_COMPLETED)
+            for fut in done:
+                try:
+                    row = fut.result()
+                except BrokenProcessPool:
+                    return list(futures.values()), queue
+                futures.pop(fut)
+                yield row
+    return [], []
+
+
+def run_local(cfg: ExperimentConfig, policy: str, tasks: list[EpisodeTask],
+              workers: int) -> Iterator[dict[str, Any]]:
+    """Rows of ``tasks`` (in completion order) from ``workers`` spawned processes.
+
+    ``workers == 1`` runs in this process. When a worker process dies, the pool is rebuilt for
+    the episodes not yet started, and each episode that was in flight is tried again alone in a
+    one-process pool (so a crash is pinned on the episode that caused it), at most
+    :data:`MAX_ATTEMPTS` times in all; then it becomes a ``worker_lost`` row.
+    """
+    if workers == 1:
+        worker = EpisodeWorker(cfg, policy)
+        yield from map(worker.run, tasks)
+        return
+    queue = list(tasks)
+    while queue:
+        suspects, queue = yield from _pool_round(cfg, policy, queue, workers)
+        for task in suspects:
+            for _ in range(MAX_ATTEMPTS - 1):
+                lost, _ = yield from _pool_round(cfg, policy, [task], 1)
+                if not lost:
+                    break
+            else:
+                yield _lost_row(task)
+
+
+def run_ray(cfg: ExperimentConfig, policy: str, tasks: list[EpisodeTask], workers: int,
+            address: str | None = None) -> Iterator[dict[str, Any]]:
+    """Rows of ``tasks`` from ``workers`` Ray actors (a local Ray instance when no address).
+
+    Actors are restarted when their process dies and the call is retried (Ray's
+    ``max_restarts``/``max_task_retries``); an episode whose actor is lost for good becomes a
+    ``worker_lost`` row.
+
+    Raises:
+        ConfigError: ``backend`` if Ray is not installed.
+    """
+    try:
+        import ray
+    except ImportError as exc:
+        raise ConfigError("backend", "ray is not installed; pip install 'vgs[ray]'") from exc
+    import logging
+
+    started = False
+    if not ray.is_initialized():
+        kwargs: dict[str, Any] = {"include_dashboard": False, "log_to_driver": False,
+                                  "logging_level": logging.ERROR}
+        if address is None:
+            kwargs["num_cpus"] = workers
+        ray.init(address=address, **kwargs)
+        started = True
+    try:
+        actor_cls = ray.remote(num_cpus=1, max_restarts=MAX_ATTEMPTS - 1,
+                               max_task_retries=MAX_ATTEMPTS - 1)(EpisodeWorker)
+        actors = [actor_cls.remote(cfg, policy) for _ in range(min(workers, len(tasks)))]
+        queue = list(tasks)
+        running: dict[Any, tuple[Any, EpisodeTask]] = {}
+        idle = list(actors)
+        while queue or running:
+            while queue and idle:
+                actor, task = idle.pop(), queue.pop(0)
+                running[actor.run.remote(task)] = (actor, task)
+            done, _ = ray.wait(list(running), num_returns=1)
+            actor, task = running.pop(done[0])
+            try:
+                yield ray.get(done[0])
+                idle.append(actor)
+            except ray.exceptions.RayActorError:
+                yield _lost_row(task)
+                idle.append(actor_cls.remote(cfg, policy))
+        for actor in actors:
+            ray.kill(actor)
+    finally:
+        if started:
+            ray.shutdown()
+
+
+# -- the evaluation run --------------------------------------------------------------------------
+
+
+def _read_journal(path: Path) -> dict[int, dict[str, Any]]:
+    rows: dict[int, dict[str, Any]] = {}
+    if path.exists():
+        for line in path.read_text().splitlines():
+            try:
+                row = json.loads(line)
+            except json.JSONDecodeError:  # a line cut short by a kill
+                continue
+            rows[int(row["index"])] = row
+    return rows
+
+
+def summarize(df: pd.DataFrame) -> dict[str, Any]:
+    """Success rates and assembly-time statistics of one evaluation table."""
+    ok = df[df["success"].astype(bool)]
+    times = ok["assembly_time"].to_numpy(float)
+
+    def stat(fn: Callable[[np.ndarray], Any]) -> float | None:
+        return float(fn(times)) if times.size else None
+
+    return {
+        "episodes": int(len(df)), "grasp_success_rate": float(df["grasp_success"].mean()),
+        "success_rate": float(len(ok) / max(len(df), 1)), "successes": int(len(ok)),
+        "time_total_h": float(times.sum() / 3600.0), "time_mean_s": stat(np.mean),
+        "time_std_s": stat(lambda t: np.std(t, ddof=1) if t.size > 1 else 0.0),
+        "time_min_s": stat(np.min), "time_max_s": stat(np.max),
+        "time_median_s": stat(np.median),
+        "abs_grasp_offset_mean_mm": float(np.nanmean(np.abs(df["grasp_offset_mm"])))
+        if df["grasp_offset_mm"].notna().any() else None,
+        "failure_reasons": {str(k): int(v) for k, v in
+                            df.loc[~df["success"].astype(bool), "failure_reason"]
+                            .value_counts().items()},
+    }
+
+
+def evaluate(cfg: ExperimentConfig, spec: EvalSpec, out: Path, workers: int | None = None,
+             backend: str = "local", ray_address: str | None = None,
+             progress: bool = True) -> pd.DataFrame:
+    """Run (or resume) an evaluation; write ``episodes.parquet``/``.csv`` and ``summary.json``.
+
+    Args:
+        cfg: Experiment configuration (cell, controller, assembly, ``eval`` ranges).
+        spec: Policy, condition, number of episodes, root seed.
+        out: Output folder; a folder holding a different evaluation is refused.
+        workers: Parallel workers (default: the number of CPU cores).
+        backend: ``local`` (processes) or ``ray``.
+        ray_address: Address of a running Ray cluster (``ray`` backend; default: start one).
+        progress: Show a progress bar.
+
+    Returns:
+        The table, one row per episode in index order.
+
+    Raises:
+        ConfigError: On a bad backend, worker count or policy, or a folder of another run.
+    """
+    if backend not in BACKENDS:
+        raise ConfigError("backend", f"must be one of {BACKENDS}, got {backend!r}")
+    workers = (os.cpu_count() or 1) if workers is None else workers
+    if workers < 1:
+        raise ConfigError("workers", f"must be >= 1, got {workers}")
+    label = policy_label(spec.policy)
+    load_policy(spec.policy, cfg)  # fail here, not in every worker, on a bad spec
+    out.mkdir(parents=True, exist_ok=True)
+    meta = {"policy": label, "policy_source": spec.policy, "condition": spec.condition,
+            "episodes": spec.episodes, "seed": spec.seed, "config": to_dict(cfg)}
+    meta_path = out / "meta.json"
+    if meta_path.exists():
+        old = json.loads(meta_path.read_text())
+        keys = ("policy_source", "condition", "seed", "config")
+        changed = [k for k in keys if json.dumps(old.get(k)) != json.dumps(meta[k])]
+        if changed:
+            raise ConfigError("out", f"{out} holds another evaluation (differs in {changed}); "
+                                     "use a new folder")
+    meta_path.write_text(json.dumps(meta, indent=2))
+
+    journal = out / "journal.jsonl"
+    rows = _read_journal(journal)
+    tasks = [t for t in plan_episodes(cfg, spec) if t.index not in rows]
+    bar = tqdm(total=spec.episodes, initial=spec.episodes - len(tasks), unit="episode",
+               desc=f"eval {label}/{spec.condition}", disable=not progress, dynamic_ncols=True)
+    if tasks:
+        n = min(workers, len(tasks))
+        source = (run_local(cfg, spec.policy, tasks, n) if backend == "local"
+                  else run_ray(cfg, spec.policy, tasks, n, ray_address))
+        with journal.open("a") as fh, bar:
+            for row in source:
+                rows[int(row["index"])] = row
+                fh.write(json.dumps(row) + "\n")
+                fh.flush()
+                bar.update(1)
+                done = [r for r in rows.values() if r["success"]]
+                bar.set_postfix(success=f"{len(done) / len(rows):.2f}",
+                                T=f"{np.mean([r['assembly_time'] for r in done]):.1f}"
+                                if done else "-")
+    else:
+        bar.close()
+    df = pd.DataFrame([rows[i] for i in range(spec.episodes)])
+    df.insert(1, "policy", label)
+    df.insert(2, "condition", spec.condition)
+    df.insert(3, "root_seed", spec.seed)
+    df.to_parquet(out / "episodes.parquet", index=False)
+    df.to_csv(out / "episodes.csv", index=False)
+    (out / "summary.json").write_text(json.dumps(
+        {"policy": label, "condition": spec.condition, **summarize(df)}, indent=2))
+    return df

@@ -1,0 +1,202 @@
+"""``vgs reproduce``: the paper's comparison with one command, resumable stage by stage.
+
+Stages, each resumable on its own (run the same command again to continue):
+
+1. **train**: for every seed of ``reproduce.train_seeds`` the baseline and VGS
+   (``DIR/train/<mode>_s<seed>``, checkpoints every ``train.checkpoint_every`` episodes). With
+   two or more workers the runs go side by side in separate processes, each with an equal share
+   of the CPU threads.
+2. **evaluate**: every trained run, greedily, and the reference policies, on every condition
+   (``DIR/eval/<policy>/<condition>``, ``eval.episodes`` test episodes each, root seed
+   ``reproduce.eval_seed``: all policies meet the same scenes). Runs of several training seeds
+   are evaluated one after the other and their tables concatenated.
+3. **sweep**: the grasp-position sweep (``DIR/sweep``), ``reproduce.sweep_offsets`` offsets x
+   ``reproduce.sweep_trials`` trials, nominal peg.
+4. **report**: :func:`vgs.experiments.report.build_report`.
+
+``DIR/reproduce.json`` holds the profile, the configuration, the machine and the wall time of
+each stage. A folder made with another configuration is refused.
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing as mp
+import os
+import platform
+import shlex
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import replace
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from vgs.config import ExperimentConfig, to_dict
+from vgs.errors import ConfigError
+from vgs.experiments.evaluate import EvalSpec, evaluate, summarize
+from vgs.experiments.report import build_report
+from vgs.experiments.train import git_revision, train
+
+MODES = ("baseline", "vgs")
+
+
+def machine() -> str:
+    """One line describing the machine (CPU cores, GPU if any)."""
+    import torch
+
+    gpu = torch.cuda.get_device_name(0) if torch.cuda.is_available() else "no GPU"
+    return (f"{platform.node()} ({platform.machine()}, {os.cpu_count()} CPU cores, {gpu}, "
+            f"Python {platform.python_version()}, torch {torch.__version__})")
+
+
+def _train_job(args: tuple[ExperimentConfig, str, str, bool, int, int]) -> str:
+    cfg, mode, out, progress, threads, position = args
+    return str(train(cfg, mode, Path(out), progress=progress, threads=threads,
+                     position=position))
+
+
+class Reproduction:
+    """One reproduction folder.
+
+    Args:
+        cfg: Experiment configuration (a profile with overrides).
+        out: Output folder.
+        workers: Parallel processes (default: the number of CPU cores).
+        backend: ``local`` or ``ray`` for the evaluations.
+        ray_address: Ray cluster address (default: a local one).
+        progress: Show progress bars.
+
+    Raises:
+        ConfigError: If ``out`` holds a reproduction with another configuration.
+    """
+
+    def __init__(self, cfg: ExperimentConfig, out: Path, workers: int | None = None,
+                 backend: str = "local", ray_address: str | None = None,
+                 progress: bool = True) -> None:
+        self.cfg = cfg
+        self.out = out
+        self.workers = (os.cpu_count() or 1) if workers is None else workers
+        if self.workers < 1:
+            raise ConfigError("workers", f"must be >= 1, got {self.workers}")
+        self.backend = backend
+        self.ray_address = ray_address
+        self.progress = progress
+        out.mkdir(parents=True, exist_ok=True)
+        self.meta_path = out / "reproduce.json"
+        self.meta: dict[str, Any] = {}
+        if self.meta_path.exists():
+            self.meta = json.loads(self.meta_path.read_text())
+            if json.dumps(self.meta.get("config")) != json.dumps(to_dict(cfg)):
+                raise ConfigError("out", f"{out} holds a reproduction with another "
+                                         "configuration; use a new folder or the same flags")
+        self.meta.update({"profile": cfg.name, "config": to_dict(cfg), "machine": machine(),
+                          "git_revision": git_revision(),
+                          "command": "vgs " + shlex.join(sys.argv[1:])
+                          if sys.argv and sys.argv[0].endswith("vgs") else None})
+        self.meta.setdefault("stage_wall_s", {})
+        self._save()
+
+    def _save(self) -> None:
+        self.meta_path.write_text(json.dumps(self.meta, indent=2))
+
+    def _stage(self, name: str, t0: float) -> None:
+        walls = self.meta["stage_wall_s"]
+        walls[name] = walls.get(name, 0.0) + time.perf_counter() - t0
+        self._save()
+
+    def run_dirs(self) -> list[tuple[str, int, Path]]:
+        """(mode, seed, folder) of every training run."""
+        return [(mode, seed, self.out / "train" / f"{mode}_s{seed}")
+                for seed in self.cfg.reproduce.train_seeds for mode in MODES]
+
+    def train(self) -> None:
+        """Stage 1: train (or resume) every run; runs go side by side over the workers."""
+        t0 = time.perf_counter()
+        jobs = []
+        parallel = max(1, min(self.workers, len(self.run_dirs())))
+        threads = max(1, (os.cpu_count() or 1) // parallel)
+        for i, (mode, seed, folder) in enumerate(self.run_dirs()):
+            if self._trained(folder):
+                continue
+            jobs.append((replace(self.cfg, seed=seed), mode, str(folder), self.progress,
+                         threads, i % parallel))
+        if parallel == 1 or len(jobs) <= 1:
+            for job in jobs:
+                _train_job(job)
+        elif jobs:
+            with ProcessPoolExecutor(parallel, mp_context=mp.get_context("spawn")) as pool:
+                list(pool.map(_train_job, jobs))
+        self._stage("train", t0)
+
+    def _trained(self, folder: Path) -> bool:
+        ckpt = folder / "episodes.csv"
+        if not ckpt.exists() or not (folder / "convergence.json").exists():
+            return False
+        return len(pd.read_csv(ckpt)) >= self.cfg.train.episodes
+
+    def evaluate(self) -> None:
+        """Stage 2: every policy on every condition."""
+        t0 = time.perf_counter()
+        r = self.cfg.reproduce
+        policies: list[tuple[str, str, Path]] = []  # (label, spec, folder)
+        for mode, seed, folder in self.run_dirs():
+            policies.append((mode, str(folder), self.out / "eval" / mode / f"s{seed}"))
+        for ref in r.reference_policies:
+            policies.append((ref, ref, self.out / "eval" / ref / "s0"))
+        for condition in r.conditions:
+            for _, spec, folder in policies:
+                evaluate(self.cfg, EvalSpec(spec, condition, self.cfg.eval.episodes,
+                                            r.eval_seed),
+                         folder / condition, workers=self.workers, backend=self.backend,
+                         ray_address=self.ray_address, progress=self.progress)
+            for label in dict.fromkeys(label for label, _, _ in policies):
+                self._merge(label, condition)
+        self._stage("evaluate", t0)
+
+    def _merge(self, label: str, condition: str) -> None:
+        """``eval/<label>/<condition>/episodes.parquet``: the tables of all training seeds."""
+        parts = sorted((self.out / "eval" / label).glob(f"s*/{condition}/episodes.parquet"))
+        df = pd.concat([pd.read_parquet(p).assign(train_run=p.parent.parent.name)
+                        for p in parts], ignore_index=True)
+        if len(parts) > 1:  # several training seeds: keep the index unique per seed
+            df["index"] = range(len(df))
+        dest = self.out / "eval" / label / condition
+        dest.mkdir(parents=True, exist_ok=True)
+        df.to_parquet(dest / "episodes.parquet", index=False)
+        df.to_csv(dest / "episodes.csv", index=False)
+        (dest / "summary.json").write_text(json.dumps(
+            {"policy": label, "condition": condition, **summarize(df)}, indent=2))
+
+    def sweep(self) -> None:
+        """Stage 3: the grasp-position sweep (skipped when done or disabled)."""
+        r = self.cfg.reproduce
+        folder = self.out / "sweep"
+        if r.sweep_offsets == 0 or (folder / "summary.json").exists():
+            return
+        from vgs.experiments.sweep import SweepSpec, default_offsets, sweep_to_folder
+
+        t0 = time.perf_counter()
+        spec = SweepSpec(default_offsets(self.cfg.cell.peg, r.sweep_offsets), r.sweep_trials,
+                         seed=r.eval_seed)
+        sweep_to_folder(self.cfg, spec, folder, workers=self.workers, progress=self.progress)
+        self._stage("sweep", t0)
+
+    def report(self) -> Path:
+        """Stage 4: the report."""
+        t0 = time.perf_counter()
+        self.meta["finished"] = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
+        self._save()
+        path = build_report(self.out, title=f"VGS reproduction report ({self.cfg.name} profile)")
+        self._stage("report", t0)
+        return path
+
+    def run(self) -> Path:
+        """All stages; returns the report's path."""
+        self.train()
+        self.evaluate()
+        self.sweep()
+        return self.report()
