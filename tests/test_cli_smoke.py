@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -94,3 +95,57 @@ def test_bad_input_one_line_exit_2(tmp_path: Path, argv: tuple[str, ...], field:
     lines = proc.stderr.splitlines()
     assert len(lines) == 1, proc.stderr
     assert lines[0].startswith(f"vgs: error: {field}: ")
+
+
+@pytest.mark.slow
+def test_evaluate_and_report(tmp_path: Path) -> None:
+    out = tmp_path / "eval"
+    proc = vgs("evaluate", "--policy", "center", "--condition", "mass", "--episodes", "2",
+               "--workers", "2", "--profile", "smoke", "--no-progress", "--json",
+               "--out", str(out), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    summary = json.loads(proc.stdout)
+    assert summary["episodes"] == 2
+    import pandas as pd
+
+    df = pd.read_parquet(out / "episodes.parquet")
+    assert list(df["policy"]) == ["center", "center"] and set(df["condition"]) == {"mass"}
+    for name in ("episodes.csv", "summary.json", "journal.jsonl", "meta.json"):
+        assert (out / name).exists()
+    bad = vgs("evaluate", "--policy", "nowhere", "--episodes", "1", "--out", str(out),
+              cwd=tmp_path)
+    assert bad.returncode == 2 and bad.stderr.startswith("vgs: error: policy:")
+
+    report_dir = tmp_path / "report"
+    shutil.copytree(Path(__file__).parent / "data" / "report_small", report_dir)
+    proc = vgs("report", str(report_dir), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert (report_dir / "report.md").exists() and (report_dir / "report.html").exists()
+    empty = vgs("report", str(tmp_path / "nothing"), cwd=tmp_path)
+    assert empty.returncode == 2 and "no evaluation results" in empty.stderr
+
+
+@pytest.mark.slow
+def test_reproduce_quick_at_reduced_size(tmp_path: Path) -> None:
+    """The README's main job (``vgs reproduce --profile quick``), shrunk to seconds."""
+    out = tmp_path / "repro"
+    args = ("reproduce", "--profile", "quick", "--out", str(out), "--workers", "2",
+            "--no-progress", "--set", "train.episodes=2", "--set", "agent.random_episodes=1",
+            "--set", "train.checkpoint_every=1", "--set", "eval.episodes=1",
+            "--set", "reproduce.conditions=('nominal', 'mass')",
+            "--set", "reproduce.sweep_offsets=1", "--set", "reproduce.sweep_trials=1")
+    proc = vgs(*args, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    for mode in ("baseline", "vgs"):
+        assert (out / "train" / f"{mode}_s0" / "checkpoint.pt").exists()
+        for condition in ("nominal", "mass"):
+            assert (out / "eval" / mode / condition / "episodes.parquet").exists()
+    assert (out / "sweep" / "sweep.csv").exists()
+    text = (out / "report.md").read_text()
+    assert "## Headline" in text and "+13.83 %" in text and "Q heat maps" in text
+    assert (out / "report.html").stat().st_size > 50_000
+    # started again, every stage is already done: nothing is trained or evaluated again
+    again = vgs(*args, cwd=tmp_path)
+    assert again.returncode == 0, again.stderr
+    walls = json.loads((out / "reproduce.json").read_text())["stage_wall_s"]
+    assert set(walls) >= {"train", "evaluate", "sweep", "report"}

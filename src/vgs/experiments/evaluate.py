@@ -84,11 +84,16 @@ class EvalSpec:
 
 @dataclass(frozen=True)
 class EpisodeTask:
-    """One planned test episode."""
+    """One planned test episode: which policy, which scene (seed) and which peg.
+
+    ``job`` tells :func:`evaluate_many` which evaluation the row belongs to.
+    """
 
     index: int
     seed: int
     peg: PegConfig
+    policy: str
+    job: int = 0
 
 
 def plan_episodes(cfg: ExperimentConfig, spec: EvalSpec) -> list[EpisodeTask]:
@@ -106,7 +111,7 @@ def plan_episodes(cfg: ExperimentConfig, spec: EvalSpec) -> list[EpisodeTask]:
         elif spec.condition == "length":
             scale = 1.0 + cfg.eval.length_range * factor
             peg = replace(nominal, length=nominal.length * scale, mass=nominal.mass * scale)
-        tasks.append(EpisodeTask(i, seed, peg))
+        tasks.append(EpisodeTask(i, seed, peg, spec.policy))
     return tasks
 
 
@@ -114,33 +119,39 @@ def plan_episodes(cfg: ExperimentConfig, spec: EvalSpec) -> list[EpisodeTask]:
 
 
 class EpisodeWorker:
-    """Runs test episodes of one policy; one per worker process (or Ray actor).
+    """Runs test episodes; one per worker process (or Ray actor). Policies are loaded on first
+    use and kept.
 
     Args:
         cfg: Experiment configuration.
-        policy: Policy spec.
     """
 
-    def __init__(self, cfg: ExperimentConfig, policy: str) -> None:
+    def __init__(self, cfg: ExperimentConfig) -> None:
         import torch
 
         torch.set_num_threads(1)
         self.cfg = cfg
         self.runner = EpisodeRunner(cfg)
-        self.policy: EvalPolicy = load_policy(policy, cfg)
+        self.policies: dict[str, EvalPolicy] = {}
+
+    def policy(self, spec: str) -> EvalPolicy:
+        if spec not in self.policies:
+            self.policies[spec] = load_policy(spec, self.cfg)
+        return self.policies[spec]
 
     def run(self, task: EpisodeTask) -> dict[str, Any]:
         """One episode as a table row; an exception becomes a failure row."""
         t0 = time.perf_counter()
         decision: dict[str, Any] = {}
         rng = np.random.default_rng([task.seed, 2])
-
-        def policy(hm: Any) -> Any:
-            d = self.policy(hm, rng)
-            decision.update(rotation=d.rotation, row=d.row, col=d.col, q_value=d.q_value)
-            return d.command
-
         try:
+            chooser = self.policy(task.policy)
+
+            def policy(hm: Any) -> Any:
+                d = chooser(hm, rng)
+                decision.update(rotation=d.rotation, row=d.row, col=d.col, q_value=d.q_value)
+                return d.command
+
             record, _, _ = self.runner.run(task.seed, policy, peg=task.peg)
             if record.success and not math.isfinite(record.assembly_time):
                 record.success, record.failure_reason = False, "unstable"
@@ -149,19 +160,18 @@ class EpisodeWorker:
                                    peg_length=task.peg.length)
             message = " ".join(str(exc).split())[:200]
             record.failure_reason = f"error:{type(exc).__name__}: {message}"
-        row = {"index": task.index, **record.to_row(),
-               "rotation": decision.get("rotation", -1), "row": decision.get("row", -1),
-               "col": decision.get("col", -1), "q_value": decision.get("q_value", math.nan),
-               "wall_s": round(time.perf_counter() - t0, 3)}
-        return row
+        return {"job": task.job, "index": task.index, **record.to_row(),
+                "rotation": decision.get("rotation", -1), "row": decision.get("row", -1),
+                "col": decision.get("col", -1), "q_value": decision.get("q_value", math.nan),
+                "wall_s": round(time.perf_counter() - t0, 3)}
 
 
 _WORKER: EpisodeWorker | None = None
 
 
-def _init_process(cfg: ExperimentConfig, policy: str) -> None:
+def _init_process(cfg: ExperimentConfig) -> None:
     global _WORKER
-    _WORKER = EpisodeWorker(cfg, policy)
+    _WORKER = EpisodeWorker(cfg)
 
 
 def _run_in_process(task: EpisodeTask) -> dict[str, Any]:
@@ -176,11 +186,11 @@ def _run_in_process(task: EpisodeTask) -> dict[str, Any]:
 def _lost_row(task: EpisodeTask) -> dict[str, Any]:
     record = EpisodeRecord(seed=task.seed, peg_mass=task.peg.mass, peg_length=task.peg.length)
     record.failure_reason = "worker_lost"
-    return {"index": task.index, **record.to_row(), "rotation": -1, "row": -1, "col": -1,
-            "q_value": math.nan, "wall_s": math.nan}
+    return {"job": task.job, "index": task.index, **record.to_row(), "rotation": -1, "row": -1,
+            "col": -1, "q_value": math.nan, "wall_s": math.nan}
 
 
-def _pool_round(cfg: ExperimentConfig, policy: str, queue: list[EpisodeTask], workers: int
+def _pool_round(cfg: ExperimentConfig, queue: list[EpisodeTask], workers: int
                 ) -> Generator[dict[str, Any], None, tuple[list[EpisodeTask], list[EpisodeTask]]]:
     """Run ``queue`` on a fresh pool, yielding rows as they finish, until done or broken.
 
@@ -191,7 +201,7 @@ def _pool_round(cfg: ExperimentConfig, policy: str, queue: list[EpisodeTask], wo
     queue = list(queue)
     futures: dict[Future[dict[str, Any]], EpisodeTask] = {}
     with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init_process,
-                             initargs=(cfg, policy)) as pool:
+                             initargs=(cfg,)) as pool:
         while queue or futures:
             while queue and len(futures) < workers:
                 task = queue.pop(0)
@@ -207,7 +217,7 @@ def _pool_round(cfg: ExperimentConfig, policy: str, queue: list[EpisodeTask], wo
     return [], []
 
 
-def run_local(cfg: ExperimentConfig, policy: str, tasks: list[EpisodeTask],
+def run_local(cfg: ExperimentConfig, tasks: list[EpisodeTask],
               workers: int) -> Iterator[dict[str, Any]]:
     """Rows of ``tasks`` (in completion order) from ``workers`` spawned processes.
 
@@ -217,22 +227,22 @@ def run_local(cfg: ExperimentConfig, policy: str, tasks: list[EpisodeTask],
     :data:`MAX_ATTEMPTS` times in all; then it becomes a ``worker_lost`` row.
     """
     if workers == 1:
-        worker = EpisodeWorker(cfg, policy)
+        worker = EpisodeWorker(cfg)
         yield from map(worker.run, tasks)
         return
     queue = list(tasks)
     while queue:
-        suspects, queue = yield from _pool_round(cfg, policy, queue, workers)
+        suspects, queue = yield from _pool_round(cfg, queue, workers)
         for task in suspects:
             for _ in range(MAX_ATTEMPTS - 1):
-                lost, _ = yield from _pool_round(cfg, policy, [task], 1)
+                lost, _ = yield from _pool_round(cfg, [task], 1)
                 if not lost:
                     break
             else:
                 yield _lost_row(task)
 
 
-def run_ray(cfg: ExperimentConfig, policy: str, tasks: list[EpisodeTask], workers: int,
+def run_ray(cfg: ExperimentConfig, tasks: list[EpisodeTask], workers: int,
             address: str | None = None) -> Iterator[dict[str, Any]]:
     """Rows of ``tasks`` from ``workers`` Ray actors (a local Ray instance when no address).
 
@@ -260,7 +270,7 @@ def run_ray(cfg: ExperimentConfig, policy: str, tasks: list[EpisodeTask], worker
     try:
         actor_cls = ray.remote(num_cpus=1, max_restarts=MAX_ATTEMPTS - 1,
                                max_task_retries=MAX_ATTEMPTS - 1)(EpisodeWorker)
-        actors = [actor_cls.remote(cfg, policy) for _ in range(min(workers, len(tasks)))]
+        actors = [actor_cls.remote(cfg) for _ in range(min(workers, len(tasks)))]
         queue = list(tasks)
         running: dict[Any, tuple[Any, EpisodeTask]] = {}
         idle = list(actors)
@@ -275,7 +285,7 @@ def run_ray(cfg: ExperimentConfig, policy: str, tasks: list[EpisodeTask], worker
                 idle.append(actor)
             except ray.exceptions.RayActorError:
                 yield _lost_row(task)
-                idle.append(actor_cls.remote(cfg, policy))
+                idle.append(actor_cls.remote(cfg))
         for actor in actors:
             ray.kill(actor)
     finally:
@@ -321,6 +331,93 @@ def summarize(df: pd.DataFrame) -> dict[str, Any]:
     }
 
 
+def _prepare(cfg: ExperimentConfig, spec: EvalSpec, out: Path) -> dict[int, dict[str, Any]]:
+    """Check and write ``out/meta.json``; return the rows already in the journal."""
+    load_policy(spec.policy, cfg)  # fail here, not in every worker, on a bad spec
+    out.mkdir(parents=True, exist_ok=True)
+    meta = {"policy": policy_label(spec.policy), "policy_source": spec.policy,
+            "condition": spec.condition, "episodes": spec.episodes, "seed": spec.seed,
+            "config": to_dict(cfg)}
+    meta_path = out / "meta.json"
+    if meta_path.exists():
+        old = json.loads(meta_path.read_text())
+        keys = ("policy_source", "condition", "seed", "config")
+        changed = [k for k in keys if json.dumps(old.get(k)) != json.dumps(meta[k])]
+        if changed:
+            raise ConfigError("out", f"{out} holds another evaluation (differs in {changed}); "
+                                     "use a new folder")
+    meta_path.write_text(json.dumps(meta, indent=2))
+    journal = out / "journal.jsonl"
+    rows = _read_journal(journal)
+    if journal.exists():  # drop a line torn by a kill, so that appending starts on a new line
+        tmp = journal.with_suffix(".tmp")
+        tmp.write_text("".join(json.dumps(rows[i]) + "\n" for i in sorted(rows)))
+        os.replace(tmp, journal)
+    return rows
+
+
+def _finish(spec: EvalSpec, out: Path, rows: dict[int, dict[str, Any]]) -> pd.DataFrame:
+    label = policy_label(spec.policy)
+    df = pd.DataFrame([rows[i] for i in range(spec.episodes)]).drop(columns="job")
+    df.insert(1, "policy", label)
+    df.insert(2, "condition", spec.condition)
+    df.insert(3, "root_seed", spec.seed)
+    df.to_parquet(out / "episodes.parquet", index=False)
+    df.to_csv(out / "episodes.csv", index=False)
+    (out / "summary.json").write_text(json.dumps(
+        {"policy": label, "condition": spec.condition, **summarize(df)}, indent=2))
+    return df
+
+
+def evaluate_many(cfg: ExperimentConfig, jobs: list[tuple[EvalSpec, Path]],
+                  workers: int | None = None, backend: str = "local",
+                  ray_address: str | None = None, progress: bool = True) -> list[pd.DataFrame]:
+    """Run (or resume) several evaluations on one set of workers.
+
+    One pool (or set of Ray actors) serves every job, so process start-up, imports and cell
+    compilation are paid once. Each job writes its own folder (see :func:`evaluate`).
+
+    Returns:
+        One table per job, rows in index order.
+
+    Raises:
+        ConfigError: On a bad backend, worker count or policy, or a folder of another run.
+    """
+    if backend not in BACKENDS:
+        raise ConfigError("backend", f"must be one of {BACKENDS}, got {backend!r}")
+    workers = (os.cpu_count() or 1) if workers is None else workers
+    if workers < 1:
+        raise ConfigError("workers", f"must be >= 1, got {workers}")
+    done = [_prepare(cfg, spec, out) for spec, out in jobs]
+    tasks = [replace(t, job=j) for j, (spec, _) in enumerate(jobs)
+             for t in plan_episodes(cfg, spec) if t.index not in done[j]]
+    total = sum(spec.episodes for spec, _ in jobs)
+    desc = (f"eval {policy_label(jobs[0][0].policy)}/{jobs[0][0].condition}" if len(jobs) == 1
+            else f"eval {len(jobs)} jobs")
+    bar = tqdm(total=total, initial=total - len(tasks), unit="episode", desc=desc,
+               disable=not progress, dynamic_ncols=True)
+    with bar:
+        if tasks:
+            n = min(workers, len(tasks))
+            source = (run_local(cfg, tasks, n) if backend == "local"
+                      else run_ray(cfg, tasks, n, ray_address))
+            journals = [(out / "journal.jsonl").open("a") for _, out in jobs]
+            try:
+                finished = ok = 0
+                for row in source:
+                    job = int(row["job"])
+                    done[job][int(row["index"])] = row
+                    journals[job].write(json.dumps(row) + "\n")
+                    journals[job].flush()
+                    bar.update(1)
+                    finished, ok = finished + 1, ok + int(bool(row["success"]))
+                    bar.set_postfix(success=f"{ok / finished:.2f}")
+            finally:
+                for fh in journals:
+                    fh.close()
+    return [_finish(spec, out, done[j]) for j, (spec, out) in enumerate(jobs)]
+
+
 def evaluate(cfg: ExperimentConfig, spec: EvalSpec, out: Path, workers: int | None = None,
              backend: str = "local", ray_address: str | None = None,
              progress: bool = True) -> pd.DataFrame:
@@ -341,53 +438,4 @@ def evaluate(cfg: ExperimentConfig, spec: EvalSpec, out: Path, workers: int | No
     Raises:
         ConfigError: On a bad backend, worker count or policy, or a folder of another run.
     """
-    if backend not in BACKENDS:
-        raise ConfigError("backend", f"must be one of {BACKENDS}, got {backend!r}")
-    workers = (os.cpu_count() or 1) if workers is None else workers
-    if workers < 1:
-        raise ConfigError("workers", f"must be >= 1, got {workers}")
-    label = policy_label(spec.policy)
-    load_policy(spec.policy, cfg)  # fail here, not in every worker, on a bad spec
-    out.mkdir(parents=True, exist_ok=True)
-    meta = {"policy": label, "policy_source": spec.policy, "condition": spec.condition,
-            "episodes": spec.episodes, "seed": spec.seed, "config": to_dict(cfg)}
-    meta_path = out / "meta.json"
-    if meta_path.exists():
-        old = json.loads(meta_path.read_text())
-        keys = ("policy_source", "condition", "seed", "config")
-        changed = [k for k in keys if json.dumps(old.get(k)) != json.dumps(meta[k])]
-        if changed:
-            raise ConfigError("out", f"{out} holds another evaluation (differs in {changed}); "
-                                     "use a new folder")
-    meta_path.write_text(json.dumps(meta, indent=2))
-
-    journal = out / "journal.jsonl"
-    rows = _read_journal(journal)
-    tasks = [t for t in plan_episodes(cfg, spec) if t.index not in rows]
-    bar = tqdm(total=spec.episodes, initial=spec.episodes - len(tasks), unit="episode",
-               desc=f"eval {label}/{spec.condition}", disable=not progress, dynamic_ncols=True)
-    if tasks:
-        n = min(workers, len(tasks))
-        source = (run_local(cfg, spec.policy, tasks, n) if backend == "local"
-                  else run_ray(cfg, spec.policy, tasks, n, ray_address))
-        with journal.open("a") as fh, bar:
-            for row in source:
-                rows[int(row["index"])] = row
-                fh.write(json.dumps(row) + "\n")
-                fh.flush()
-                bar.update(1)
-                done = [r for r in rows.values() if r["success"]]
-                bar.set_postfix(success=f"{len(done) / len(rows):.2f}",
-                                T=f"{np.mean([r['assembly_time'] for r in done]):.1f}"
-                                if done else "-")
-    else:
-        bar.close()
-    df = pd.DataFrame([rows[i] for i in range(spec.episodes)])
-    df.insert(1, "policy", label)
-    df.insert(2, "condition", spec.condition)
-    df.insert(3, "root_seed", spec.seed)
-    df.to_parquet(out / "episodes.parquet", index=False)
-    df.to_csv(out / "episodes.csv", index=False)
-    (out / "summary.json").write_text(json.dumps(
-        {"policy": label, "condition": spec.condition, **summarize(df)}, indent=2))
-    return df
+    return evaluate_many(cfg, [(spec, out)], workers, backend, ray_address, progress)[0]

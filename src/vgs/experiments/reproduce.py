@@ -37,7 +37,7 @@ import pandas as pd
 
 from vgs.config import ExperimentConfig, to_dict
 from vgs.errors import ConfigError
-from vgs.experiments.evaluate import EvalSpec, evaluate, summarize
+from vgs.experiments.evaluate import EvalSpec, evaluate_many, summarize
 from vgs.experiments.report import build_report
 from vgs.experiments.train import git_revision, train
 
@@ -147,12 +147,12 @@ class Reproduction:
             policies.append((mode, str(folder), self.out / "eval" / mode / f"s{seed}"))
         for ref in r.reference_policies:
             policies.append((ref, ref, self.out / "eval" / ref / "s0"))
+        jobs = [(EvalSpec(spec, condition, self.cfg.eval.episodes, r.eval_seed),
+                 folder / condition)
+                for condition in r.conditions for _, spec, folder in policies]
+        evaluate_many(self.cfg, jobs, workers=self.workers, backend=self.backend,
+                      ray_address=self.ray_address, progress=self.progress)
         for condition in r.conditions:
-            for _, spec, folder in policies:
-                evaluate(self.cfg, EvalSpec(spec, condition, self.cfg.eval.episodes,
-                                            r.eval_seed),
-                         folder / condition, workers=self.workers, backend=self.backend,
-                         ray_address=self.ray_address, progress=self.progress)
             for label in dict.fromkeys(label for label, _, _ in policies):
                 self._merge(label, condition)
         self._stage("evaluate", t0)
