@@ -575,12 +575,16 @@ def _paper() -> ExperimentConfig:
 
 
 def _quick() -> ExperimentConfig:
+    # Sized to finish `vgs reproduce --profile quick` within 15 minutes on a 2-core CPU:
+    # 2 x 80 training episodes side by side, 3 policies x 3 conditions x 12 test episodes, a
+    # 5 x 3 sweep. Far too small to learn the grasp position; it shows the whole pipeline.
     return ExperimentConfig(
         name="quick",
         network=NetworkConfig(backbone="light", num_rotations=8),
-        agent=AgentConfig(random_episodes=40, target_update_period=10, delta_q_window=20),
-        train=TrainConfig(episodes=160, checkpoint_every=20),
-        eval=EvalConfig(episodes=60),
+        agent=AgentConfig(random_episodes=30, target_update_period=10, delta_q_window=20),
+        train=TrainConfig(episodes=80, checkpoint_every=10),
+        eval=EvalConfig(episodes=12),
+        reproduce=ReproduceConfig(sweep_offsets=5, sweep_trials=3),
     )
 
 
@@ -592,6 +596,7 @@ def _smoke() -> ExperimentConfig:
                           replay_capacity=64),
         train=TrainConfig(episodes=4, checkpoint_every=2),
         eval=EvalConfig(episodes=4),
+        reproduce=ReproduceConfig(sweep_offsets=3, sweep_trials=1),
     )
 
 

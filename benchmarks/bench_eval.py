@@ -1,0 +1,176 @@
+"""Speed of evaluation at scale and of the reproduction profiles.
+
+Run: ``.venv/bin/python benchmarks/bench_eval.py [--episodes 8] [--quick] [--quick-dir DIR]``.
+
+Prints
+
+* episodes per second of ``evaluate`` with 1 and 2 local worker processes on the same test
+  episodes (centre grasp, nominal peg), and the scaling efficiency
+  ``(episodes/s with 2) / (2 x episodes/s with 1)`` (target >= 0.8 on a 2-core machine);
+* Ray's wall time over local processes' for the same episodes with 2 workers (start-up of the
+  local Ray instance included, and without it);
+* the wall time of ``vgs reproduce --profile quick`` (``--quick`` runs it in a subprocess;
+  ``--quick-dir`` reads the stage times of a finished run) (target: 15 minutes);
+* an estimate of the ``paper`` profile's wall time on this machine, from measured parts: the
+  mean wall time of a training episode's simulation (from the quick run's ``episodes.csv``,
+  network time removed), one training step and one greedy decision of each backbone at the
+  paper's settings (R = 16, 224 x 224), and the measured evaluation throughput
+  (targets: 8 h with DenseNet-121, 3 h with the light backbone).
+
+Figures only, no assertions. Wall times on a shared machine are noisy: ratios are more stable.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from vgs.config import profile
+from vgs.experiments.evaluate import EvalSpec, evaluate_many
+
+
+def throughput(episodes: int, workers: int, backend: str, seed: int = 7) -> tuple[float, float]:
+    """(wall seconds, summed per-episode seconds) of ``episodes`` centre-grasp test episodes."""
+    cfg = profile("paper")
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        (df,) = evaluate_many(cfg, [(EvalSpec("center", "nominal", episodes, seed),
+                                     Path(tmp))], workers=workers, backend=backend,
+                              progress=False)
+        wall = time.perf_counter() - t0
+    return wall, float(df["wall_s"].sum())
+
+
+def ray_startup() -> float:
+    """Seconds to start and stop a local Ray instance."""
+    import ray
+
+    t0 = time.perf_counter()
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    ray.shutdown()
+    return time.perf_counter() - t0
+
+
+def network_step_seconds(backbone: str, threads: int) -> tuple[float, float]:
+    """(one training update incl. one replay, one greedy decision) at R = 16, 224 px [s]."""
+    import torch
+
+    from vgs.config import AgentConfig, NetworkConfig
+    from vgs.grasping.agent import GraspAgent
+    from vgs.grasping.replay import ReplayBuffer, Transition
+
+    torch.set_num_threads(threads)
+    agent = GraspAgent(NetworkConfig(backbone=backbone, num_rotations=16), AgentConfig())
+    rng = np.random.default_rng(0)
+    color = rng.integers(0, 255, (224, 224, 3), dtype=np.uint8)
+    depth = np.zeros((224, 224), np.float32)
+    depth[100:115, 80:130] = 0.03
+    tr = Transition(color, depth, (3, 107, 100), 0.3, done=True)
+    replay = ReplayBuffer(10)
+    agent.update(tr)  # warm-up
+    t0 = time.perf_counter()
+    stats = agent.update(tr)
+    replay.add(tr, stats["delta_q"])
+    agent.replay_update(replay, rng)
+    update = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    agent.q_values(color, depth)
+    decide = time.perf_counter() - t0
+    return update, decide
+
+
+def quick_wall(run_quick: bool, quick_dir: Path | None) -> tuple[float | None, Path | None]:
+    if run_quick:
+        out = Path(tempfile.mkdtemp()) / "quick"
+        vgs = str(Path(sys.executable).with_name("vgs"))
+        t0 = time.perf_counter()
+        subprocess.run([vgs, "reproduce", "--profile", "quick", "--out", str(out),
+                        "--no-progress"], check=True)
+        return time.perf_counter() - t0, out
+    if quick_dir is not None:
+        walls = json.loads((quick_dir / "reproduce.json").read_text())["stage_wall_s"]
+        return float(sum(walls.values())), quick_dir
+    return None, None
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--episodes", type=int, default=8, help="test episodes per measurement")
+    parser.add_argument("--quick", action="store_true",
+                        help="also run `vgs reproduce --profile quick` (about 15 min)")
+    parser.add_argument("--quick-dir", type=Path,
+                        help="a finished quick reproduction to read stage times from")
+    parser.add_argument("--no-ray", action="store_true", help="skip the Ray measurement")
+    args = parser.parse_args()
+    cores = os.cpu_count() or 1
+    print(f"machine: {cores} CPU cores; load average before: {os.getloadavg()[0]:.2f}")
+
+    w1, s1 = throughput(args.episodes, 1, "local")
+    w2, s2 = throughput(args.episodes, 2, "local")
+    eps1, eps2 = args.episodes / w1, args.episodes / w2
+    print(f"local, 1 worker : {w1:7.1f} s wall, {eps1:.3f} episodes/s "
+          f"(sum of episode times {s1:.1f} s)")
+    print(f"local, 2 workers: {w2:7.1f} s wall, {eps2:.3f} episodes/s "
+          f"(sum of episode times {s2:.1f} s)")
+    print(f"scaling efficiency at 2 workers: {eps2 / (2 * eps1):.2f} (target >= 0.8)")
+    print(f"  per-episode time with 2 workers / with 1: {s2 / s1:.2f} "
+          "(1.00 = no slowdown from sharing the machine)")
+    if not args.no_ray:
+        try:
+            wr, _ = throughput(args.episodes, 2, "ray")
+            start = ray_startup()
+            print(f"ray, 2 workers  : {wr:7.1f} s wall; ray / local = {wr / w2:.2f} "
+                  f"(start-up {start:.1f} s; without it {(wr - start) / w2:.2f})")
+        except ImportError:
+            print("ray: not installed (pip install 'vgs[ray]')")
+
+    wall, qdir = quick_wall(args.quick, args.quick_dir)
+    if wall is None:
+        print("quick profile: not measured (pass --quick or --quick-dir)")
+        return
+    print(f"quick profile: {wall / 60:.1f} min wall (target 15 min)")
+    walls = json.loads((qdir / "reproduce.json").read_text())["stage_wall_s"]
+    print("  stages: " + ", ".join(f"{k} {v / 60:.1f} min" for k, v in walls.items()))
+
+    # Paper profile estimate from measured parts.
+    paper = profile("paper")
+    runs = [pd.read_csv(p) for p in sorted((qdir / "train").glob("*/episodes.csv"))]
+    quick = profile("quick")
+    q_update, q_decide = network_step_seconds(quick.network.backbone, max(1, cores // 2))
+    train = pd.concat(runs)
+    sim_train = float(train["wall_s"].mean()) - q_update - q_decide * float(
+        (train["explored"] == 0).mean())
+    evals = [pd.read_parquet(p) for p in sorted((qdir / "eval").glob("*/*/episodes.parquet"))]
+    sim_eval = float(pd.concat(evals)["wall_s"].mean())
+    n_policies = 2 * len(paper.reproduce.train_seeds) + len(paper.reproduce.reference_policies)
+    n_eval = paper.eval.episodes * len(paper.reproduce.conditions) * n_policies
+    n_sweep = paper.reproduce.sweep_offsets * paper.reproduce.sweep_trials
+    greedy_share = 1.0 - paper.agent.random_episodes / paper.train.episodes
+    print(f"paper profile estimate ({paper.train.episodes} training episodes per run, "
+          f"{n_eval} test and {n_sweep} sweep episodes, {cores} cores):")
+    print(f"  measured: simulation {sim_train:.2f} s per training episode, {sim_eval:.2f} s "
+          "per test episode (one process each)")
+    for backbone in ("densenet121", "light"):
+        update, decide = network_step_seconds(backbone, max(1, cores // 2))
+        per_train = sim_train + update + greedy_share * decide
+        parallel = min(cores, 2 * len(paper.reproduce.train_seeds))
+        train_h = 2 * len(paper.reproduce.train_seeds) * paper.train.episodes * per_train \
+            / parallel / 3600
+        eval_h = (n_eval * (sim_eval + decide * 2 / 3) + n_sweep * sim_eval) / cores / 3600
+        target = 8 if backbone == "densenet121" else 3
+        print(f"  {backbone:<11}: update {update:.2f} s, decision {decide:.2f} s -> training "
+              f"{train_h:.1f} h + evaluation {eval_h:.1f} h = {train_h + eval_h:.1f} h "
+              f"(target {target} h)")
+
+
+if __name__ == "__main__":
+    main()
