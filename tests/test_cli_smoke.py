@@ -118,9 +118,12 @@ def test_evaluate_and_report(tmp_path: Path) -> None:
 
     report_dir = tmp_path / "report"
     shutil.copytree(Path(__file__).parent / "data" / "report_small", report_dir)
-    proc = vgs("report", str(report_dir), cwd=tmp_path)
+    proc = vgs("report", str(report_dir), "--publish", str(tmp_path / "pub"), cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     assert (report_dir / "report.md").exists() and (report_dir / "report.html").exists()
+    assert (tmp_path / "pub" / "report.md").exists()
+    assert (tmp_path / "pub" / "eval" / "vgs" / "mass" / "episodes.parquet").exists()
+    assert not list((tmp_path / "pub").rglob("*.pt"))
     empty = vgs("report", str(tmp_path / "nothing"), cwd=tmp_path)
     assert empty.returncode == 2 and "no evaluation results" in empty.stderr
 

@@ -293,6 +293,11 @@ def cmd_report(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
 
     path = build_report(Path(args.dir))
     print(f"wrote {path} and {path.with_suffix('.html')}")
+    if args.publish:
+        from vgs.experiments.report import publish
+
+        files = publish(Path(args.dir), Path(args.publish))
+        print(f"copied {len(files)} result files (no checkpoints) to {args.publish}")
     return 0
 
 
@@ -429,6 +434,9 @@ def build_parser() -> argparse.ArgumentParser:
     report = sub.add_parser("report", parents=[common],
                             help="write DIR/report.md and DIR/report.html from DIR's results")
     report.add_argument("dir", help="a reproduce folder (with eval/<policy>/<condition>/)")
+    report.add_argument("--publish", metavar="DEST",
+                        help="also copy the small result files (report, figures, tables; no "
+                             "checkpoints) to DEST, e.g. docs/results/quick")
     report.set_defaults(func=cmd_report)
     return parser
 

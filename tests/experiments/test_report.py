@@ -92,3 +92,11 @@ def test_report_builds_from_a_stored_result_set(tmp_path: Path) -> None:
 def test_report_without_results_is_a_config_error(tmp_path: Path) -> None:
     with pytest.raises(ConfigError, match="no evaluation results"):
         build_report(tmp_path)
+
+
+def test_too_few_successes_give_no_interval() -> None:
+    t = np.linspace(100, 150, 10)
+    ok = np.zeros(10, bool)
+    ok[:2] = True
+    gain = efficiency_gain(_table("baseline", t, success=ok), _table("vgs", 0.5 * t))
+    assert np.isnan(gain.low) and "too few successes" in gain.text()

@@ -25,6 +25,7 @@ import base64
 import html
 import json
 import math
+import shutil
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -40,6 +41,8 @@ from vgs.errors import ConfigError  # noqa: E402
 from vgs.experiments.evaluate import CONDITIONS, summarize  # noqa: E402
 
 BOOTSTRAP_RESAMPLES = 2000
+# Fewer successful assemblies than this per policy: times are not compared (no verdict, no CI).
+MIN_SUCCESSES = 5
 LEARNED = ("baseline", "vgs")
 CONDITION_TITLES = {
     "nominal": "Nominal peg (paper Fig. 8)",
@@ -73,6 +76,8 @@ class Gain:
     def text(self) -> str:
         if not math.isfinite(self.value):
             return "n/a"
+        if not math.isfinite(self.low):
+            return f"{self.value:+.2f} % [too few successes]"
         return f"{self.value:+.2f} % [{self.low:+.2f}, {self.high:+.2f}]"
 
 
@@ -84,8 +89,10 @@ def efficiency_gain(base: pd.DataFrame, vgs: pd.DataFrame, resamples: int = BOOT
                     seed: int = 0) -> Gain:
     """``100 (T_base - T_vgs) / T_base`` on mean successful assembly times, bootstrap 95 % CI.
 
-    Episodes are paired by ``index`` when both tables hold the same indices (the same scenes);
-    otherwise each table is resampled on its own.
+    The interval is NaN when either policy has fewer than :data:`MIN_SUCCESSES` successful
+    assemblies (a mean of one or two times has no useful interval). Episodes are paired by
+    ``index`` when both tables hold the same indices (the same scenes); otherwise each table is
+    resampled on its own.
     """
     def arrays(df: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
         return df["assembly_time"].to_numpy(float), df["success"].to_numpy(bool)
@@ -97,8 +104,8 @@ def efficiency_gain(base: pd.DataFrame, vgs: pd.DataFrame, resamples: int = BOOT
     mb, mv = _mean_success(tb, ob), _mean_success(tv, ov)
     value = 100.0 * (mb - mv) / mb if math.isfinite(mb) and math.isfinite(mv) else math.nan
     paired = list(base["index"]) == list(vgs["index"])
-    if not math.isfinite(value):
-        return Gain(math.nan, math.nan, math.nan, paired, len(base))
+    if not math.isfinite(value) or min(ob.sum(), ov.sum()) < MIN_SUCCESSES:
+        return Gain(value, math.nan, math.nan, paired, len(base))
     rng = np.random.default_rng(seed)
     gains = np.empty(resamples)
     for b in range(resamples):
@@ -310,9 +317,12 @@ def _paper(condition: str, key: str, which: int, digits: int = 2) -> str:
 
 
 def _verdict(condition: str, gain: Gain, base: dict[str, Any], vgs: dict[str, Any]) -> str:
-    if not math.isfinite(gain.value):
-        return (f"**{condition}**: no comparison possible (a policy has no successful "
-                "assembly).")
+    success = (f"success {base['success_rate']:.1%} (baseline, {base['successes']} of "
+               f"{base['episodes']}) vs {vgs['success_rate']:.1%} (VGS, {vgs['successes']} of "
+               f"{vgs['episodes']})")
+    if not math.isfinite(gain.low):
+        return (f"**{condition}**: too few successful assemblies to compare times (at least "
+                f"{MIN_SUCCESSES} per policy needed); {success}.")
     paper = PAPER[condition]["gain"]
     if gain.low > 0:
         verdict = "VGS was faster than the baseline (the 95 % interval excludes 0)"
@@ -321,9 +331,8 @@ def _verdict(condition: str, gain: Gain, base: dict[str, Any], vgs: dict[str, An
     else:
         verdict = "no significant difference between VGS and the baseline (the 95 % interval " \
                   "includes 0)"
-    return (f"**{condition}**: {verdict}: gain {gain.text()} (paper: {paper:+.2f} %); success "
-            f"{base['success_rate']:.1%} (baseline) vs {vgs['success_rate']:.1%} (VGS); "
-            f"std {_f(base['time_std_s'], 2)} vs {_f(vgs['time_std_s'], 2)} s.")
+    return (f"**{condition}**: {verdict}: gain {gain.text()} (paper: {paper:+.2f} %); "
+            f"{success}; std {_f(base['time_std_s'], 2)} vs {_f(vgs['time_std_s'], 2)} s.")
 
 
 def _training_rows(out: Path) -> list[list[str]]:
@@ -484,3 +493,32 @@ def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
     (out / "report.md").write_text(doc.markdown())
     (out / "report.html").write_text(doc.html(title))
     return out / "report.md"
+
+
+PUBLISHED = ("reproduce.json", "report.md", "report.html", "results.csv", "figures/*.png",
+             "eval/*/*/episodes.parquet", "eval/*/*/episodes.csv", "eval/*/*/summary.json",
+             "train/*/episodes.csv", "train/*/run.json", "train/*/threshold.json",
+             "train/*/convergence.json", "sweep/*")
+
+
+def publish(out: Path, dest: Path) -> list[Path]:
+    """Copy the small result files of a reproduction (no checkpoints, no TensorBoard logs, no
+    journals) from ``out`` to ``dest`` (e.g. ``docs/results/quick``), keeping the layout.
+
+    Returns:
+        The copied files.
+
+    Raises:
+        ConfigError: If ``out`` holds no report.
+    """
+    if not (out / "report.md").exists():
+        raise ConfigError("report", f"{out} holds no report.md; run vgs report first")
+    copied = []
+    for pattern in PUBLISHED:
+        for src in sorted(out.glob(pattern)):
+            if src.is_file():
+                target = dest / src.relative_to(out)
+                target.parent.mkdir(parents=True, exist_ok=True)
+                shutil.copy2(src, target)
+                copied.append(target)
+    return copied
