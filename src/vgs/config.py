@@ -623,13 +623,20 @@ def override(cfg: Any, path: str, value: Any) -> Any:
     Example: ``override(cfg, "cell.peg.mass", 0.6)``. Validation runs again on every level.
 
     Raises:
-        ConfigError: If the path names no field or the value is invalid.
+        ConfigError: If the path names no field (the error names the whole path) or the value is
+            invalid (the error names the field that rejected it).
     """
     head, _, rest = path.partition(".")
     if not is_dataclass(cfg) or head not in {f.name for f in fields(cfg)}:
         raise ConfigError(path, "no such configuration field")
     if rest:
-        return replace(cfg, **{head: override(getattr(cfg, head), rest, value)})
+        try:
+            inner = override(getattr(cfg, head), rest, value)
+        except ConfigError as exc:
+            if exc.field == rest:  # an unknown field below: name it from the top
+                raise ConfigError(path, exc.message) from None
+            raise
+        return replace(cfg, **{head: inner})
     return replace(cfg, **{head: value})
 
 

@@ -16,10 +16,12 @@ class ConfigError(VGSError, ValueError):
 
     Attributes:
         field: Dotted name of the offending field (for example ``peg.mass``).
+        message: What is wrong with it.
     """
 
     def __init__(self, field: str, message: str) -> None:
         self.field = field
+        self.message = message
         super().__init__(f"{field}: {message}")
 
 
