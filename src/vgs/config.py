@@ -617,6 +617,9 @@ def profile(name: str) -> ExperimentConfig:
         ) from None
 
 
+NO_SUCH_FIELD = "no such configuration field"
+
+
 def override(cfg: Any, path: str, value: Any) -> Any:
     """Return a copy of a nested frozen dataclass with the dotted field ``path`` set to ``value``.
 
@@ -624,16 +627,16 @@ def override(cfg: Any, path: str, value: Any) -> Any:
 
     Raises:
         ConfigError: If the path names no field (the error names the whole path) or the value is
-            invalid (the error names the field that rejected it).
+            invalid (the error names the field as its validator does, e.g. ``hole.clearance``).
     """
     head, _, rest = path.partition(".")
     if not is_dataclass(cfg) or head not in {f.name for f in fields(cfg)}:
-        raise ConfigError(path, "no such configuration field")
+        raise ConfigError(path, NO_SUCH_FIELD)
     if rest:
         try:
             inner = override(getattr(cfg, head), rest, value)
         except ConfigError as exc:
-            if exc.field == rest:  # an unknown field below: name it from the top
+            if exc.field == rest and exc.message == NO_SUCH_FIELD:  # name it from the top
                 raise ConfigError(path, exc.message) from None
             raise
         return replace(cfg, **{head: inner})
