@@ -35,16 +35,25 @@ class FTSensor:
         self.sigma = np.array([cfg.force_noise] * 3 + [cfg.torque_noise] * 3)
         self.filtered: np.ndarray | None = None
         self.tare_offset = np.zeros(6)
+        self._noise = np.zeros(6)  # work arrays, reused every sample
+        self._out = np.zeros(6)
 
     def sample(self, raw: np.ndarray) -> np.ndarray:
         """Feed one raw reading ``(fx, fy, fz, tx, ty, tz)`` and return the tared external wrench
-        in the sensor frame."""
-        noisy = raw + self.sigma * self.rng.standard_normal(6)
+        in the sensor frame (an array the next call overwrites: copy it to keep it)."""
+        noisy = self._noise
+        self.rng.standard_normal(out=noisy)
+        noisy *= self.sigma
+        noisy += raw
         if self.filtered is None:
             self.filtered = noisy.copy()
         else:
-            self.filtered += self.alpha * (noisy - self.filtered)
-        return -(self.filtered - self.tare_offset)
+            noisy -= self.filtered
+            noisy *= self.alpha
+            self.filtered += noisy
+        out = self._out
+        np.subtract(self.tare_offset, self.filtered, out=out)
+        return out
 
     def tare(self) -> None:
         """Zero the sensor at the current (filtered) reading."""
