@@ -120,8 +120,8 @@ class ArmController:
     # -- commands ---------------------------------------------------------------------------
 
     def set_reference(self, p: np.ndarray, R: np.ndarray) -> None:
-        self.p_ref = np.asarray(p, dtype=float).copy()
-        self.R_ref = np.asarray(R, dtype=float).copy()
+        self.p_ref = np.array(p, dtype=float)
+        self.R_ref = np.array(R, dtype=float)
 
     def commanded_pose(self) -> tuple[np.ndarray, np.ndarray]:
         e = self.admittance.offset
