@@ -9,7 +9,7 @@ Each control tick (period ``sim.timestep * sim.control_decimation``):
 4. differential IK on the *commanded* joint vector (the robot's kinematic model evaluated on a
    scratch ``MjData``, independent of servo lag) with damped least squares:
    ``q_cmd <- q_cmd + (J^T J + lambda^2 I)^-1 J^T [p_cmd - p(q_cmd); log(R_cmd R(q_cmd)^T)]``
-   (two Newton steps per tick),
+   (two steps per tick; the second reuses the first step's Jacobian),
    ``J`` the 6x6 TCP Jacobian of the arm joints at ``q_cmd`` (MuJoCo ``mj_jacSite``), each step
    clipped to the UR5's joint speed;
 5. the UR5's joint position servos (MuJoCo position actuators with stiffness ``joint_kp`` and
@@ -149,21 +149,24 @@ class ArmController:
         step_max = MAX_JOINT_SPEED * dt
         q = self.q_cmd
         px, py, pz = p_cmd.tolist()
-        for _ in range(IK_ITERATIONS):
+        for k in range(IK_ITERATIONS):
             self._sqpos[:] = q
             mujoco.mj_kinematics(m, sd)
-            mujoco.mj_comPos(m, sd)
-            mujoco.mj_jacSite(m, sd, jac[:3], jac[3:], site)
+            if k == 0:
+                # Jacobian at the first iterate; the later Newton steps reuse it and its
+                # factorisation (a chord step: |dq| <= pi dt per joint, so J barely changes).
+                mujoco.mj_comPos(m, sd)
+                mujoco.mj_jacSite(m, sd, jac[:3], jac[3:], site)
+                # Damped least squares: dq = (J^T J + lambda^2 I)^-1 J^T err, Cholesky-factored
+                # (the matrix is symmetric positive definite).
+                np.matmul(JT, J, out=H)
+                H += self._damp
+                mujoco.mju_cholFactor(H, 0.0)
             x, y, z = self._s_tcp_xpos.tolist()
             np.matmul(R_cmd, self._s_tcp_xmat.T, out=self._Rerr)
             e = (px - x, py - y, pz - z, *log_so3_tuple(self._Rerr))
             err[:] = e
-            # Damped least squares: dq = (J^T J + lambda^2 I)^-1 J^T err (Cholesky: the matrix
-            # is symmetric positive definite).
-            np.matmul(JT, J, out=H)
-            H += self._damp
             np.matmul(JT, err, out=g)
-            mujoco.mju_cholFactor(H, 0.0)
             mujoco.mju_cholSolve(dq, H, g)
             np.minimum(dq, step_max, out=dq)
             np.maximum(dq, -step_max, out=dq)
