@@ -216,9 +216,9 @@ class SimConfig:
             values > 1 make static friction stiffer, which a friction grasp needs.
         noslip_iterations: Iterations of MuJoCo's no-slip post-solver (0 = off). MuJoCo's
             friction is soft: under a sustained moment below the static limit a peg held 35 mm
-            from its centre of mass turns in the pads at about 0.9 deg/s; one iteration stops
-            that creep but costs about a fifth of the physics time, and over 100 seeds it did
-            not assemble more often (docs/assembly.md, "Speed" and "No-slip").
+            from its centre of mass turns in the pads at about 1 deg/s; one iteration stops that
+            creep but costs 15-25 % of the real-time factor, and over 100 centre-grasp seeds it
+            did not assemble more often (docs/assembly.md, "No-slip solver").
     """
 
     timestep: float = 0.002
