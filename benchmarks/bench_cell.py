@@ -1,6 +1,7 @@
 """Speed of the simulated cell: physics steps per second, real-time factor, controller overhead.
 
-Run: ``.venv/bin/python benchmarks/bench_cell.py [--episodes 5] [--steps 5000]``.
+Run: ``.venv/bin/python benchmarks/bench_cell.py [--episodes 5] [--steps 5000] [--set KEY=VALUE]``
+(``--set`` as in the ``vgs`` commands, e.g. ``--set cell.sim.noslip_iterations=1``).
 
 Prints, for one process pinned to one CPU core:
 
@@ -22,6 +23,7 @@ Figures only, no assertions.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import platform
 import time
@@ -34,7 +36,7 @@ import mujoco
 import numpy as np
 
 from vgs.assembly.episode import EpisodeRunner, center_policy
-from vgs.config import profile
+from vgs.config import ExperimentConfig, override, profile
 from vgs.sim.cell import HOME_Q, Cell
 
 
@@ -97,9 +99,8 @@ def pin_to_one_core() -> str:
     return "not pinned (no sched_setaffinity)"
 
 
-def steps_holding_still(steps: int) -> Clock:
+def steps_holding_still(steps: int, cfg: ExperimentConfig) -> Clock:
     """Time of ``steps`` physics steps with the arm servoed at home and the peg on the table."""
-    cfg = profile("paper")
     cell = Cell(cfg.cell, cfg.controller.joint_kp, cfg.controller.joint_kv)
     cell.reset(np.random.default_rng(0))
     m, d = cell.model, cell.data
@@ -131,9 +132,8 @@ class AssemblyTiming:
     timer: StepTimer
 
 
-def assemblies(episodes: int, profile_name: str, seed: int) -> AssemblyTiming:
+def assemblies(episodes: int, cfg: ExperimentConfig, seed: int) -> AssemblyTiming:
     """Run whole episodes (centre grasp) in this process and time them."""
-    cfg = profile(profile_name)
     runner = EpisodeRunner(cfg)
     _, camera = runner.cell(cfg.cell.peg)  # compile outside the timing
     timer = StepTimer()
@@ -186,14 +186,21 @@ def main() -> None:
     parser.add_argument("--profile", default="paper")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--all-cores", action="store_true", help="do not pin to one core")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="configuration override (JSON value), e.g. "
+                             "cell.sim.noslip_iterations=1; repeatable")
     args = parser.parse_args()
     pinned = "not pinned" if args.all_cores else pin_to_one_core()
     cfg = profile(args.profile)
+    for item in args.set:
+        key, _, value = item.partition("=")
+        cfg = override(cfg, key, json.loads(value))
     print(f"vgs cell benchmark: mujoco {mujoco.__version__}, {platform.machine()}, {pinned}, "
           f"time step {1000 * cfg.cell.sim.timestep:g} ms, control every "
-          f"{cfg.cell.sim.control_decimation} steps")
-    still = steps_holding_still(args.steps)
-    timing = assemblies(args.episodes, args.profile, args.seed)
+          f"{cfg.cell.sim.control_decimation} steps, no-slip iterations "
+          f"{cfg.cell.sim.noslip_iterations}" + "".join(f", {s}" for s in args.set))
+    still = steps_holding_still(args.steps, cfg)
+    timing = assemblies(args.episodes, cfg, args.seed)
     report(still, args.steps, timing, cfg.cell.sim.timestep)
 
 

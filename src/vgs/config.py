@@ -132,7 +132,11 @@ class GripperConfig:
             on a flat pad touches along a line of the pad's length L = 22 mm; with uniform
             pressure, turning it about the line's midpoint takes mu F L / 4, so the
             coefficient is mu L / 4 = 5.5 mm for mu = 1.
-        pad_rolling_friction: Rolling friction of the pads [m].
+        pad_rolling_friction: Rolling friction of the pads [m]. 0 (the default) gives the pad
+            contacts ``condim=4`` (sliding and torsional friction); > 0 gives ``condim=6``. The
+            peg touches each pad along a line, which MuJoCo resolves into two contact points, so
+            sliding friction at the points already resists rotation about the pad-plane axes;
+            rolling friction adds little but costs a quarter of the physics time in contact.
         closing_speed: Finger closing speed [m/s] (RG2: about 0.11 m/s full stroke in 1 s).
     """
 
@@ -140,7 +144,7 @@ class GripperConfig:
     stroke: float = 0.110
     pad_friction: float = 1.0
     pad_torsional_friction: float = 0.0055
-    pad_rolling_friction: float = 0.0005
+    pad_rolling_friction: float = 0.0
     closing_speed: float = 0.11
 
     def __post_init__(self) -> None:
@@ -210,6 +214,11 @@ class SimConfig:
             least twice the time step.
         impratio: Ratio of frictional to normal constraint impedance (MuJoCo ``impratio``);
             values > 1 make static friction stiffer, which a friction grasp needs.
+        noslip_iterations: Iterations of MuJoCo's no-slip post-solver (0 = off). MuJoCo's
+            friction is soft: under a sustained moment below the static limit a peg held 35 mm
+            from its centre of mass turns in the pads at about 1 deg/s; one iteration stops that
+            creep but costs 15-25 % of the real-time factor, and over 100 centre-grasp seeds it
+            did not assemble more often (docs/assembly.md, "No-slip solver").
     """
 
     timestep: float = 0.002

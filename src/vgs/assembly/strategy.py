@@ -38,6 +38,7 @@ state (never the hole's true pose, never the contact list):
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
@@ -104,6 +105,7 @@ class AssemblyModule:
         self.phase_start = 0.0
         self.phase_times: dict[str, float] = {}
         self.estimate: PegEstimate | None = None
+        self._timeouts = dict(cfg.timeouts)
 
     # -- bookkeeping --------------------------------------------------------------------------
 
@@ -117,7 +119,7 @@ class AssemblyModule:
 
     def _check_timeout(self, phase: str) -> None:
         spent = self.phase_times.get(phase, 0.0) + self.robot.time - self.phase_start
-        if spent > self.cfg.timeout(phase):
+        if spent > self._timeouts[phase]:
             raise PhaseTimeout(phase)
 
     # -- the whole module --------------------------------------------------------------------
@@ -259,30 +261,40 @@ class AssemblyModule:
         center = robot.arm.p_ref[:2].copy()
         theta = 0.0
         b = cfg.spiral_pitch / (2 * math.pi)
-        window: list[float] = []
+        # Sliding maximum of the filtered height over the last n_window ticks: a deque of
+        # (tick, height) with decreasing heights, so the maximum is its first entry.
+        window: deque[tuple[int, float]] = deque()
         n_window = max(1, int(round(DROP_WINDOW / robot.dt)))
         alpha = robot.dt / (Z_FILTER_TIME + robot.dt)
-        z_f = float(robot.cell.data.site_xpos[robot.cell.ids.tcp_site][2])
+        tcp_z = robot.cell.data.site_xpos[robot.cell.ids.tcp_site, 2:3]
+        z_f = float(tcp_z[0])
         settle_ticks = int(round(SETTLE_TIME / robot.dt))
+        p_ref = robot.arm.p_ref.copy()
+        tick = 0
         while True:
             r = b * theta
             if r > cfg.search_radius:
                 theta, r = 0.0, 0.0  # start the spiral again from its centre
             # d(theta)/dt = v / sqrt(r^2 + b^2): constant tangential speed on the spiral.
             theta += cfg.spiral_speed * robot.dt / math.hypot(r, b * 2)
-            p_ref = robot.arm.p_ref.copy()
-            p_ref[:2] = center + r * np.array([math.cos(theta), math.sin(theta)])
+            p_ref[2] = robot.arm.p_ref[2]
+            p_ref[0] = center[0] + r * math.cos(theta)
+            p_ref[1] = center[1] + r * math.sin(theta)
             robot.arm.set_reference(p_ref, robot.arm.R_ref)
             robot.tick()
             # Low-pass filtered TCP height: the rubbing spiral's stick-slip makes it chatter.
-            z_f += alpha * (float(robot.cell.data.site_xpos[robot.cell.ids.tcp_site][2]) - z_f)
-            window.append(z_f)
-            if len(window) > n_window:
-                window.pop(0)
+            z_f += alpha * (float(tcp_z[0]) - z_f)
+            while window and window[-1][1] <= z_f:
+                window.pop()
+            window.append((tick, z_f))
+            if window[0][0] <= tick - n_window:
+                window.popleft()
+            tick += 1
             settle_ticks -= 1
             # A drop below the recent height: the leading rim fell over the hole edge.
-            if settle_ticks < 0 and z_f < max(window) - cfg.drop_threshold:
-                self.z_search = max(window)
+            z_max = window[0][1]
+            if settle_ticks < 0 and z_f < z_max - cfg.drop_threshold:
+                self.z_search = z_max
                 break
             self._check_timeout("search")
 

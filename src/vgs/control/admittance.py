@@ -38,6 +38,10 @@ class Admittance:
         self.offset = np.zeros(6)
         self.velocity = np.zeros(6)
         self.wrench_des = np.zeros(6)
+        self.vmax = np.array([cfg.max_speed] * 3 + [cfg.max_angular_speed] * 3)
+        self._force = np.zeros(6)  # work arrays, reused every step
+        self._denom = np.zeros(6)
+        self._denom_dt = -1.0
         self.set_stiffness(np.array([cfg.trans_stiffness] * 3 + [cfg.rot_stiffness] * 3))
 
     def set_stiffness(self, stiffness: np.ndarray) -> None:
@@ -52,6 +56,7 @@ class Admittance:
         # minimum above).
         force_axes = (stiffness == 0) & (np.arange(6) < 3)
         self.damping[force_axes] = np.maximum(self.damping[force_axes], self.cfg.force_damping)
+        self._denom_dt = -1.0  # M + D dt must be recomputed
 
     def reset(self) -> None:
         self.offset[:] = 0.0
@@ -60,10 +65,21 @@ class Admittance:
 
     def step(self, wrench_ext: np.ndarray, dt: float) -> np.ndarray:
         """Advance the offset by ``dt`` (semi-implicit Euler, damping implicit) and return it."""
-        force = wrench_ext + self.wrench_des - self.stiffness * self.offset
+        if dt != self._denom_dt:
+            np.multiply(self.damping, dt, out=self._denom)
+            self._denom += self.mass
+            self._denom_dt = dt
+        force, v = self._force, self.velocity
+        # force = w_ext + w_des - K e
+        np.multiply(self.stiffness, self.offset, out=force)
+        np.subtract(self.wrench_des, force, out=force)
+        force += wrench_ext
         # (M + D dt) v_new = M v + force dt: unconditionally stable in the damping term.
-        self.velocity = (self.mass * self.velocity + force * dt) / (self.mass + self.damping * dt)
-        vmax = np.array([self.cfg.max_speed] * 3 + [self.cfg.max_angular_speed] * 3)
-        np.clip(self.velocity, -vmax, vmax, out=self.velocity)
-        self.offset += self.velocity * dt
+        force *= dt
+        v *= self.mass
+        v += force
+        v /= self._denom
+        np.minimum(v, self.vmax, out=v)
+        np.maximum(v, -self.vmax, out=v)
+        self.offset += v * dt
         return self.offset

@@ -9,7 +9,7 @@ Each control tick (period ``sim.timestep * sim.control_decimation``):
 4. differential IK on the *commanded* joint vector (the robot's kinematic model evaluated on a
    scratch ``MjData``, independent of servo lag) with damped least squares:
    ``q_cmd <- q_cmd + (J^T J + lambda^2 I)^-1 J^T [p_cmd - p(q_cmd); log(R_cmd R(q_cmd)^T)]``
-   (two Newton steps per tick),
+   (two steps per tick; the second reuses the first step's Jacobian),
    ``J`` the 6x6 TCP Jacobian of the arm joints at ``q_cmd`` (MuJoCo ``mj_jacSite``), each step
    clipped to the UR5's joint speed;
 5. the UR5's joint position servos (MuJoCo position actuators with stiffness ``joint_kp`` and
@@ -25,7 +25,7 @@ import numpy as np
 
 from vgs.config import ControllerConfig
 from vgs.control.admittance import Admittance
-from vgs.control.transforms import exp_so3, log_so3
+from vgs.control.transforms import exp_so3, log_so3_tuple
 from vgs.sim.cell import Cell
 from vgs.sim.ft_sensor import FTSensor
 
@@ -50,17 +50,36 @@ class ArmController:
         self.cfg = cfg
         self.ft = ft
         self.admittance = Admittance(cfg)
-        self._jacp = np.zeros((3, cell.model.nv))
-        self._jacr = np.zeros((3, cell.model.nv))
+        m, d, ids = cell.model, cell.data, cell.ids
         self.wrench = np.zeros(6)  # tared external wrench at the TCP, world frame
         self.wrench_sensor = np.zeros(6)  # tared external wrench, sensor frame
-        self.p_ref, self.R_ref = self.tcp_pose()
-        self._scratch = mujoco.MjData(cell.model)
-        self.q_cmd = self.joint_positions()
-        self._J = np.zeros((6, 6))
-        self._err = np.zeros(6)
-        self._damp = DLS_LAMBDA**2 * np.eye(6)
         self.compliant = False  # False: the F/T signal does not drive the admittance
+        self._scratch = mujoco.MjData(m)
+        # Views and work arrays reused every tick (numpy's per-call overhead dominates on
+        # 6-vectors; fancy indexing and fresh arrays would cost more than the arithmetic).
+        self._qpos = _block(d.qpos, ids.arm_qpos)
+        self._ctrl = _block(d.ctrl, ids.arm_act)
+        self._sqpos = _block(self._scratch.qpos, ids.arm_qpos)
+        self._tcp_xpos = d.site_xpos[ids.tcp_site]
+        self._tcp_xmat = d.site_xmat[ids.tcp_site].reshape(3, 3)
+        self._ft_xpos = d.site_xpos[ids.ft_site]
+        self._ft_xmat = d.site_xmat[ids.ft_site].reshape(3, 3)
+        self._s_tcp_xpos = self._scratch.site_xpos[ids.tcp_site]
+        self._s_tcp_xmat = self._scratch.site_xmat[ids.tcp_site].reshape(3, 3)
+        if ids.ft_torque_adr != ids.ft_force_adr + 3:
+            raise ValueError("the F/T force and torque sensors must be adjacent")
+        self._raw = d.sensordata[ids.ft_force_adr:ids.ft_force_adr + 6]
+        self._jac = np.zeros((6, m.nv))  # rows: translation, rotation
+        self._J = _block(self._jac.T, ids.arm_dof).T  # a view: follows mj_jacSite's output
+        self._JT = self._J.T
+        self._err = np.zeros(6)
+        self._H = np.zeros((6, 6))
+        self._g = np.zeros(6)
+        self._dq = np.zeros(6)
+        self._damp = DLS_LAMBDA**2 * np.eye(6)
+        self._Rerr = np.zeros((3, 3))
+        self.p_ref, self.R_ref = self.tcp_pose()
+        self.q_cmd = self.joint_positions()
 
     def set_compliant(self, on: bool) -> None:
         """Let the F/T signal drive the admittance (True) or hold the reference stiffly."""
@@ -75,40 +94,42 @@ class ArmController:
         d, s = self.cell.data, self.cell.ids.tcp_site
         return d.site_xpos[s].copy(), d.site_xmat[s].reshape(3, 3).copy()
 
+    def tcp_height(self) -> float:
+        """Height of the TCP from the measured joint angles [m] (no copies)."""
+        return float(self._tcp_xpos[2])
+
     def joint_positions(self) -> np.ndarray:
-        return self.cell.data.qpos[self.cell.ids.arm_qpos].copy()
+        return self._qpos.copy()
 
     def read_ft(self) -> np.ndarray:
         """Sample the F/T sensor; update and return the world-frame wrench at the TCP."""
-        d, ids = self.cell.data, self.cell.ids
-        raw = np.concatenate(
-            [d.sensordata[ids.ft_force_adr:ids.ft_force_adr + 3],
-             d.sensordata[ids.ft_torque_adr:ids.ft_torque_adr + 3]]
-        )
-        w = self.ft.sample(raw)
+        w = self.ft.sample(self._raw)
         self.wrench_sensor = w
-        R_world_ft = d.site_xmat[ids.ft_site].reshape(3, 3)
-        f = R_world_ft @ w[:3]
-        r = d.site_xpos[ids.ft_site] - d.site_xpos[ids.tcp_site]
+        R_world_ft = self._ft_xmat
         wrench = self.wrench
-        wrench[:3] = f
-        wrench[3:] = R_world_ft @ w[3:]
-        wrench[3] += r[1] * f[2] - r[2] * f[1]
-        wrench[4] += r[2] * f[0] - r[0] * f[2]
-        wrench[5] += r[0] * f[1] - r[1] * f[0]
+        f = wrench[:3]
+        np.matmul(R_world_ft, w[:3], out=f)
+        np.matmul(R_world_ft, w[3:], out=wrench[3:])
+        (r0, r1, r2) = (self._ft_xpos - self._tcp_xpos).tolist()
+        f0, f1, f2 = f.tolist()
+        wrench[3] += r1 * f2 - r2 * f1
+        wrench[4] += r2 * f0 - r0 * f2
+        wrench[5] += r0 * f1 - r1 * f0
         return wrench
 
     # -- commands ---------------------------------------------------------------------------
 
     def set_reference(self, p: np.ndarray, R: np.ndarray) -> None:
-        self.p_ref = np.asarray(p, dtype=float).copy()
-        self.R_ref = np.asarray(R, dtype=float).copy()
+        self.p_ref = np.array(p, dtype=float)
+        self.R_ref = np.array(R, dtype=float)
 
     def commanded_pose(self) -> tuple[np.ndarray, np.ndarray]:
         e = self.admittance.offset
-        if not e[3:].any():
-            return self.p_ref + e[:3], self.R_ref
-        return self.p_ref + e[:3], exp_so3(e[3:]) @ self.R_ref
+        p = self.p_ref + e[:3]
+        rx, ry, rz = e[3:].tolist()
+        if rx == 0.0 and ry == 0.0 and rz == 0.0:
+            return p, self.R_ref
+        return p, exp_so3((rx, ry, rz)) @ self.R_ref
 
     def absorb_offset(self) -> None:
         """Move the compliant offset into the reference (the commanded pose is unchanged)."""
@@ -122,22 +143,43 @@ class ArmController:
         if self.compliant:
             self.admittance.step(self.wrench, dt)
         p_cmd, R_cmd = self.commanded_pose()
-        m, ids, sd = self.cell.model, self.cell.ids, self._scratch
-        J, err = self._J, self._err
+        m, sd, site = self.cell.model, self._scratch, self.cell.ids.tcp_site
+        jac, J, JT, err, H, g, dq = (self._jac, self._J, self._JT, self._err, self._H, self._g,
+                                     self._dq)
         step_max = MAX_JOINT_SPEED * dt
-        for _ in range(IK_ITERATIONS):
-            sd.qpos[ids.arm_qpos] = self.q_cmd
+        q = self.q_cmd
+        px, py, pz = p_cmd.tolist()
+        for k in range(IK_ITERATIONS):
+            self._sqpos[:] = q
             mujoco.mj_kinematics(m, sd)
-            mujoco.mj_comPos(m, sd)
-            mujoco.mj_jacSite(m, sd, self._jacp, self._jacr, ids.tcp_site)
-            J[:3] = self._jacp[:, ids.arm_dof]
-            J[3:] = self._jacr[:, ids.arm_dof]
-            err[:3] = p_cmd - sd.site_xpos[ids.tcp_site]
-            err[3:] = log_so3(R_cmd @ sd.site_xmat[ids.tcp_site].reshape(3, 3).T)
-            # Damped least squares: dq = (J^T J + lambda^2 I)^-1 J^T err.
-            dq = np.linalg.solve(J.T @ J + self._damp, J.T @ err)
-            np.clip(dq, -step_max, step_max, out=dq)
-            self.q_cmd += dq
-            if np.abs(err).max() < 1e-7:
+            if k == 0:
+                # Jacobian at the first iterate; the later Newton steps reuse it and its
+                # factorisation (a chord step: |dq| <= pi dt per joint, so J barely changes).
+                mujoco.mj_comPos(m, sd)
+                mujoco.mj_jacSite(m, sd, jac[:3], jac[3:], site)
+                # Damped least squares: dq = (J^T J + lambda^2 I)^-1 J^T err, Cholesky-factored
+                # (the matrix is symmetric positive definite).
+                np.matmul(JT, J, out=H)
+                H += self._damp
+                mujoco.mju_cholFactor(H, 0.0)
+            x, y, z = self._s_tcp_xpos.tolist()
+            np.matmul(R_cmd, self._s_tcp_xmat.T, out=self._Rerr)
+            e = (px - x, py - y, pz - z, *log_so3_tuple(self._Rerr))
+            err[:] = e
+            np.matmul(JT, err, out=g)
+            mujoco.mju_cholSolve(dq, H, g)
+            np.minimum(dq, step_max, out=dq)
+            np.maximum(dq, -step_max, out=dq)
+            q += dq
+            if max(e) < 1e-7 and min(e) > -1e-7:
                 break
-        self.cell.data.ctrl[ids.arm_act] = self.q_cmd
+        self._ctrl[:] = q
+
+
+def _block(array: np.ndarray, index: np.ndarray) -> np.ndarray:
+    """The view ``array[i0:i0 + n]`` for ``index = i0 .. i0 + n - 1`` (the cell builds the arm's
+    joints and actuators as contiguous runs)."""
+    i0 = int(index[0])
+    if not np.array_equal(index, np.arange(i0, i0 + len(index))):
+        raise ValueError("the arm's joints and actuators must be numbered contiguously")
+    return array[i0:i0 + len(index)]

@@ -21,6 +21,7 @@ class Gripper:
         self.cell = cell
         self.cfg = cfg
         self.target = cfg.stroke / 2  # per-finger opening target [m]
+        self._acts = [int(a) for a in cell.ids.finger_act]
 
     def command(self, width: float) -> None:
         """Set the target opening between the pads [m] (0 = closed, stroke = open)."""
@@ -28,10 +29,13 @@ class Gripper:
 
     def update(self, dt: float) -> None:
         """Ramp each finger's servo target toward the opening target at the closing speed."""
-        d, ids = self.cell.data, self.cell.ids
+        ctrl = self.cell.data.ctrl
         step = self.cfg.closing_speed / 2 * dt
-        for a in ids.finger_act:
-            d.ctrl[a] += min(max(self.target - d.ctrl[a], -step), step)
+        target = self.target
+        for a in self._acts:
+            c = float(ctrl[a])
+            if c != target:
+                ctrl[a] = c + min(max(target - c, -step), step)
 
     def width(self) -> float:
         """Finger width reading [m]."""

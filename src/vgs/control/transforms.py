@@ -16,28 +16,43 @@ def skew(v: np.ndarray) -> np.ndarray:
 
 
 def exp_so3(w: np.ndarray) -> np.ndarray:
-    """Rodrigues: ``exp([w]_x) = I + sin(t) K + (1 - cos t) K^2``, ``t = |w|``, ``K = [w/t]_x``."""
-    theta = float(np.linalg.norm(w))
+    """Rodrigues: ``exp([w]_x) = I + sin(t) K + (1 - cos t) K^2``, ``t = |w|``, ``K = [w/t]_x``.
+
+    Written out on Python floats (with ``K^2 = u u^T - I``, ``u = w / t``): numpy's per-call
+    overhead dominates on 3-vectors, and this runs several times per control tick.
+    """
+    w0, w1, w2 = w.tolist() if isinstance(w, np.ndarray) else (float(v) for v in w)
+    theta = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
     if theta < 1e-12:
-        return np.eye(3) + skew(w)
-    K = skew(w / theta)
-    return np.eye(3) + math.sin(theta) * K + (1.0 - math.cos(theta)) * (K @ K)
+        return np.array([[1.0, -w2, w1], [w2, 1.0, -w0], [-w1, w0, 1.0]])
+    x, y, z = w0 / theta, w1 / theta, w2 / theta
+    s, c = math.sin(theta), 1.0 - math.cos(theta)
+    xy, xz, yz = c * x * y, c * x * z, c * y * z
+    return np.array([
+        [1.0 - c * (y * y + z * z), xy - s * z, xz + s * y],
+        [xy + s * z, 1.0 - c * (x * x + z * z), yz - s * x],
+        [xz - s * y, yz + s * x, 1.0 - c * (x * x + y * y)],
+    ])
 
 
 def log_so3(R: np.ndarray) -> np.ndarray:
     """Inverse of :func:`exp_so3`: the rotation vector ``w`` with ``exp([w]_x) = R``."""
-    cos_t = max(-1.0, min(1.0, 0.5 * (np.trace(R) - 1.0)))
+    return np.array(log_so3_tuple(R))
+
+
+def log_so3_tuple(R: np.ndarray) -> tuple[float, float, float]:
+    """:func:`log_so3` as three Python floats (the controller's inner loop uses these)."""
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R.tolist()
+    cos_t = max(-1.0, min(1.0, 0.5 * (r00 + r11 + r22 - 1.0)))
     theta = math.acos(cos_t)
-    v = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
-    if theta < 1e-9:
-        return 0.5 * v
     if math.pi - theta < 1e-6:
         # Near pi: axis from the largest diagonal of (R + I) / 2.
-        M = 0.5 * (R + np.eye(3))
+        M = 0.5 * (np.asarray(R, dtype=float) + np.eye(3))
         axis = M[:, int(np.argmax(np.diag(M)))]
-        axis = axis / np.linalg.norm(axis)
-        return theta * axis
-    return theta / (2.0 * math.sin(theta)) * v
+        axis = theta * axis / np.linalg.norm(axis)
+        return float(axis[0]), float(axis[1]), float(axis[2])
+    k = 0.5 if theta < 1e-9 else theta / (2.0 * math.sin(theta))
+    return k * (r21 - r12), k * (r02 - r20), k * (r10 - r01)
 
 
 def rot_x(a: float) -> np.ndarray:

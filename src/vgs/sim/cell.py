@@ -151,6 +151,8 @@ class Cell:
             m.actuator_biasprm[a, 1] = -arm_kp[i]
             m.actuator_biasprm[a, 2] = -arm_kv[i]
         self.hole_xy = np.array(cfg.hole.nominal_xy, dtype=float)
+        self._badqacc = self.data.warning[mujoco.mjtWarning.mjWARN_BADQACC]
+        self._peg_qacc = self.data.qacc[self.ids.peg_dof:self.ids.peg_dof + 1]
 
     # -- reset ------------------------------------------------------------------------------
 
@@ -197,9 +199,7 @@ class Cell:
     def step(self, nstep: int) -> None:
         """Advance the physics ``nstep`` steps; raise :class:`SimulationError` on divergence."""
         mujoco.mj_step(self.model, self.data, nstep)
-        if self.data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number > 0 or not np.isfinite(
-            self.data.qacc[self.ids.peg_dof]
-        ):
+        if self._badqacc.number > 0 or not math.isfinite(self._peg_qacc[0]):
             raise SimulationError("physics diverged (bad qacc)")
 
     # -- ground truth (logging and tests only) ----------------------------------------------

@@ -15,6 +15,8 @@ import numpy as np
 
 from vgs.config import FTSensorConfig
 
+NOISE_BLOCK = 256
+
 
 class FTSensor:
     """Noisy, filtered, tared wrist F/T sensor.
@@ -35,16 +37,32 @@ class FTSensor:
         self.sigma = np.array([cfg.force_noise] * 3 + [cfg.torque_noise] * 3)
         self.filtered: np.ndarray | None = None
         self.tare_offset = np.zeros(6)
+        self._noise = np.zeros(6)  # work arrays, reused every sample
+        self._out = np.zeros(6)
+        # Standard normal draws in blocks (one generator call per NOISE_BLOCK samples; the
+        # sequence is the same as drawing six values per sample).
+        self._block = np.zeros((NOISE_BLOCK, 6))
+        self._next = NOISE_BLOCK
 
     def sample(self, raw: np.ndarray) -> np.ndarray:
         """Feed one raw reading ``(fx, fy, fz, tx, ty, tz)`` and return the tared external wrench
-        in the sensor frame."""
-        noisy = raw + self.sigma * self.rng.standard_normal(6)
+        in the sensor frame (an array the next call overwrites: copy it to keep it)."""
+        if self._next == NOISE_BLOCK:
+            self.rng.standard_normal(out=self._block)
+            self._next = 0
+        noisy = self._noise
+        np.multiply(self._block[self._next], self.sigma, out=noisy)
+        self._next += 1
+        noisy += raw
         if self.filtered is None:
             self.filtered = noisy.copy()
         else:
-            self.filtered += self.alpha * (noisy - self.filtered)
-        return -(self.filtered - self.tare_offset)
+            noisy -= self.filtered
+            noisy *= self.alpha
+            self.filtered += noisy
+        out = self._out
+        np.subtract(self.tare_offset, self.filtered, out=out)
+        return out
 
     def tare(self) -> None:
         """Zero the sensor at the current (filtered) reading."""

@@ -22,17 +22,22 @@ TABLE_CENTER = (0.40, 0.05)
 
 
 def add_table(world: mujoco.MjsBody) -> None:
-    """A fixed table whose top surface is the plane z = 0."""
+    """A fixed table whose top surface is the plane z = 0 (``condim=6``: a peg lying on it resists
+    rolling)."""
     world.add_geom(
         name="table", type=mujoco.mjtGeom.mjGEOM_BOX, size=list(TABLE_HALF),
         pos=[TABLE_CENTER[0], TABLE_CENTER[1], -TABLE_HALF[2]], rgba=[0.55, 0.42, 0.3, 1],
-        contype=CT_SCENE, conaffinity=0, friction=[0.5, 0.005, 0.0001], group=0,
+        contype=CT_SCENE, conaffinity=0, condim=6, friction=[0.5, 0.005, 0.0001], group=0,
     )
 
 
 def add_peg(world: mujoco.MjsBody, cfg: PegConfig, solref: list[float],
             solimp: list[float]) -> None:
     """A free cylinder; its axis is the body's z axis, its centre of mass the body origin.
+
+    Its contacts with the hole block have ``condim=4`` (sliding and torsional friction); with the
+    table ``condim=6`` (the table's), whose rolling friction keeps the lying peg from rolling away
+    from a closing finger; the pads' priority decides the pad contacts.
 
     Sites: ``peg_com`` (centre), ``peg_end_pos`` / ``peg_end_neg`` (centres of the two flat ends).
     """
@@ -41,7 +46,7 @@ def add_peg(world: mujoco.MjsBody, cfg: PegConfig, solref: list[float],
     peg.add_geom(
         name="peg", type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[cfg.radius, cfg.length / 2, 0],
         mass=cfg.mass, rgba=[0.85, 0.2, 0.15, 1], contype=CT_PEG,
-        conaffinity=CT_SCENE | CT_GRIPPER, condim=6,
+        conaffinity=CT_SCENE | CT_GRIPPER, condim=4,
         friction=[cfg.friction, 0.002, 0.0005], solref=solref, solimp=solimp, group=0,
     )
     peg.add_site(name="peg_com", pos=[0, 0, 0], size=[0.003, 0, 0], group=3)

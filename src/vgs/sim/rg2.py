@@ -70,7 +70,8 @@ def add_rg2(flange: mujoco.MjsBody, spec: mujoco.MjSpec, cfg: GripperConfig,
         finger.add_geom(
             name=f"pad_{side}", type=mujoco.mjtGeom.mjGEOM_BOX, size=list(PAD_HALF),
             pos=[0, sign * y_pad, 0], mass=FINGER_MASS * 0.2, rgba=[0.1, 0.1, 0.1, 1],
-            contype=CT_GRIPPER, conaffinity=CT_SCENE | CT_PEG, condim=6, group=1,
+            contype=CT_GRIPPER, conaffinity=CT_SCENE | CT_PEG,
+            condim=6 if cfg.pad_rolling_friction > 0 else 4, group=1,
             friction=[cfg.pad_friction, cfg.pad_torsional_friction, cfg.pad_rolling_friction],
             solref=solref, solimp=solimp, priority=1,
         )
