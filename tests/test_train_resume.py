@@ -78,3 +78,23 @@ def test_action_to_command_maps_closing_direction_to_pad_heading() -> None:
     assert (cmd.x, cmd.y) == pytest.approx((0.055, 0.025))
     # Closing along +x (theta = 0) means the pads' long side lies along y.
     assert math.cos(cmd.yaw) == pytest.approx(0.0, abs=1e-12)
+
+
+@pytest.mark.slow
+def test_parallel_episodes_are_deterministic(tmp_path: Path) -> None:
+    """K = 2 worker processes: the same table twice; its first episode (chosen before any
+    update, with the generator in the same state) is the sequential run's first episode."""
+    cfg = override(override(tiny_config(), "train.checkpoint_every", 2), "train.episodes", 4)
+    sequential = train_mod.train(cfg, "vgs", tmp_path / "k1", progress=False)
+    cfg2 = override(cfg, "train.parallel_episodes", 2)
+    a = rows(train_mod.train(cfg2, "vgs", tmp_path / "k2a", progress=False))
+    b = rows(train_mod.train(cfg2, "vgs", tmp_path / "k2b", progress=False))
+    assert [r["episode"] for r in a] == ["0", "1", "2", "3"]
+    assert a == b
+    assert a[0] == rows(sequential)[0]
+
+
+def test_checkpoints_must_fall_on_batch_ends() -> None:
+    with pytest.raises(ConfigError, match="checkpoint_every"):
+        override(override(tiny_config(), "train.checkpoint_every", 3),
+                 "train.parallel_episodes", 2)

@@ -496,13 +496,19 @@ class TrainConfig:
 
     Attributes:
         episodes: Grasp-and-assemble episodes in all (paper: 5000).
-        checkpoint_every: Episodes between checkpoints.
+        checkpoint_every: Episodes between checkpoints (a multiple of ``parallel_episodes``).
         device: ``cpu``, ``cuda`` or ``auto``.
+        parallel_episodes: K; 1 (default, as in the paper) runs grasp, assembly and update one
+            episode after the other. K > 1 chooses the grasps of K consecutive episodes with the
+            same network, runs their physics in K worker processes and then updates in episode
+            order: for machines with many cores, the network's information is up to K - 1
+            episodes older when it decides.
     """
 
     episodes: int = 5000
     checkpoint_every: int = 50
     device: str = "auto"
+    parallel_episodes: int = 1
 
     def __post_init__(self) -> None:
         if self.episodes < 1:
@@ -511,6 +517,12 @@ class TrainConfig:
             raise ConfigError("train.checkpoint_every", "must be >= 1")
         if self.device not in ("cpu", "cuda", "auto"):
             raise ConfigError("train.device", f"must be cpu, cuda or auto, got {self.device!r}")
+        if self.parallel_episodes < 1:
+            raise ConfigError("train.parallel_episodes", "must be >= 1")
+        if self.checkpoint_every % self.parallel_episodes:
+            raise ConfigError("train.checkpoint_every",
+                              f"must be a multiple of train.parallel_episodes "
+                              f"({self.parallel_episodes}), so that a resumed run starts a batch")
 
 
 @dataclass(frozen=True)

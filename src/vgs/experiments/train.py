@@ -32,10 +32,12 @@ from __future__ import annotations
 import csv
 import json
 import math
+import multiprocessing as mp
 import os
 import subprocess
 import sys
 import time
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -45,8 +47,9 @@ import torch
 from tqdm import tqdm
 
 from vgs.assembly.episode import EpisodeRunner, GraspCommand
+from vgs.assembly.record import EpisodeRecord
 from vgs.config import ExperimentConfig, from_dict, to_dict
-from vgs.errors import ConfigError
+from vgs.errors import ConfigError, VGSError
 from vgs.grasping.agent import DeltaQMonitor, GraspAction, GraspAgent
 from vgs.grasping.preprocess import peg_mask
 from vgs.grasping.replay import ReplayBuffer, Transition
@@ -116,6 +119,23 @@ def _open_csv(path: Path, start_episode: int) -> Any:
     writer.writerows(rows)
     f.flush()
     return f, writer
+
+
+_COLLECTOR_RUNNER: EpisodeRunner | None = None
+
+
+def _init_collector(cfg: ExperimentConfig) -> None:
+    global _COLLECTOR_RUNNER
+    torch.set_num_threads(1)
+    _COLLECTOR_RUNNER = EpisodeRunner(cfg)
+
+
+def _run_command(seed: int, command: GraspCommand) -> EpisodeRecord:
+    """One training episode's physics in a collector process, the grasp already chosen."""
+    if _COLLECTOR_RUNNER is None:
+        raise VGSError("training collector used before its initialisation")
+    record, _, _ = _COLLECTOR_RUNNER.run(seed, lambda hm: command)
+    return record
 
 
 def save_checkpoint(path: Path, agent: GraspAgent, replay: ReplayBuffer, state: TrainState,
@@ -188,22 +208,45 @@ def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
                desc=f"train {mode}", disable=not progress, dynamic_ncols=True,
                 position=position)
     recent: list[tuple[bool, float]] = []
+    # Parallel episodes (train.parallel_episodes = K > 1): the grasps of K consecutive episodes
+    # are chosen with the same network, their physics runs in K worker processes, and the
+    # updates follow in episode order.
+    k_parallel = cfg.train.parallel_episodes
+    collector = (ProcessPoolExecutor(k_parallel, mp_context=mp.get_context("spawn"),
+                                     initializer=_init_collector, initargs=(cfg,))
+                 if k_parallel > 1 else None)
+    pending: dict[int, tuple[Any, int, float, GraspAction, Heightmap]] = {}
     try:
         for episode in bar:
             t0 = time.perf_counter()
-            seed = episode_seed(cfg.seed, episode)
-            epsilon = agent.epsilon(episode, total)
-            chosen: dict[str, Any] = {}
+            if collector is None:
+                seed = episode_seed(cfg.seed, episode)
+                epsilon = agent.epsilon(episode, total)
+                chosen: dict[str, Any] = {}
 
-            def policy(hm: Heightmap, epsilon: float = epsilon,
-                       chosen: dict[str, Any] = chosen) -> GraspCommand:
-                action = agent.act(hm.color, hm.depth, epsilon, peg_mask(hm.depth), rng,
-                                   skip_q_if_exploring=True)
-                chosen["action"], chosen["hm"] = action, hm
-                return action_to_command(action, hm)
+                def policy(hm: Heightmap, epsilon: float = epsilon,
+                           chosen: dict[str, Any] = chosen) -> GraspCommand:
+                    action = agent.act(hm.color, hm.depth, epsilon, peg_mask(hm.depth), rng,
+                                       skip_q_if_exploring=True)
+                    chosen["action"], chosen["hm"] = action, hm
+                    return action_to_command(action, hm)
 
-            record, _, _ = runner.run(seed, policy)
-            action, hm = chosen["action"], chosen["hm"]
+                record, _, _ = runner.run(seed, policy)
+                action, hm = chosen["action"], chosen["hm"]
+            else:
+                if episode not in pending:  # first episode of a batch: choose K grasps at once
+                    batch_end = min(episode - episode % k_parallel + k_parallel, total)
+                    for e in range(episode, batch_end):
+                        seed_e = episode_seed(cfg.seed, e)
+                        eps_e = agent.epsilon(e, total)
+                        hm_e = runner.observe(seed_e)
+                        act_e = agent.act(hm_e.color, hm_e.depth, eps_e, peg_mask(hm_e.depth),
+                                          rng, skip_q_if_exploring=True)
+                        pending[e] = (collector.submit(_run_command, seed_e,
+                                                       action_to_command(act_e, hm_e)),
+                                      seed_e, eps_e, act_e, hm_e)
+                future, seed, epsilon, action, hm = pending.pop(episode)
+                record = future.result()
 
             # Reward (eq. 5). The threshold is the running percentile while exploring.
             exploring = episode < cfg.agent.random_episodes
@@ -277,6 +320,8 @@ def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
     finally:
         csv_file.close()
         writer.close()
+        if collector is not None:
+            collector.shutdown(cancel_futures=True)
     (out / "convergence.json").write_text(json.dumps(
         {"delta_q_threshold": cfg.agent.delta_q_threshold, "window": cfg.agent.delta_q_window,
          "converged": bool(monitor.converged), "delta_q_window_mean": monitor.mean}))
