@@ -12,7 +12,6 @@ from __future__ import annotations
 import argparse
 import ast
 import json
-import math
 import os
 import sys
 from collections.abc import Sequence
@@ -21,6 +20,7 @@ from typing import Any, NoReturn
 
 from vgs.config import ExperimentConfig, PegConfig, override, profile
 from vgs.errors import ConfigError, VGSError
+from vgs.jsonsafe import json_safe
 
 # Flag -> dotted configuration path. Values are SI (m, kg, N).
 OVERRIDE_FLAGS: dict[str, str] = {
@@ -104,16 +104,6 @@ def config_from_args(args: argparse.Namespace) -> ExperimentConfig:
     return cfg
 
 
-def _json_safe(value: Any) -> Any:
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: _json_safe(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_json_safe(v) for v in value]
-    return value
-
-
 def _float_list_mm(text: str) -> tuple[float, ...]:
     """Comma-separated millimetres -> metres."""
     try:
@@ -140,7 +130,7 @@ def cmd_demo(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     out.mkdir(parents=True, exist_ok=True)
     figure = demo_figure(result, out / "demo.png")
     if args.json:
-        print(json.dumps(_json_safe(result.record.to_row())))
+        print(json.dumps(json_safe(result.record.to_row())))
     else:
         print(format_report(result.record))
         print(f"\nfigure          {figure}")
@@ -230,7 +220,7 @@ def cmd_curves(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
 
     summaries = plot_curves([Path(r) for r in args.runs], Path(args.out), window=args.window)
     if args.json:
-        print(json.dumps(_json_safe(summaries), indent=2))
+        print(json.dumps(json_safe(summaries), indent=2))
         return 0
     print(f"{'run':<28} {'phase':<12} {'n':>4} {'grasp':>6} {'assembly':>8} {'T [s]':>7} "
           f"{'|l| [mm]':>8} {'reward':>6}")
@@ -254,7 +244,7 @@ def cmd_evaluate(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
                   ray_address=args.ray_address, progress=not args.no_progress)
     s = summarize(df)
     if args.json:
-        print(json.dumps(_json_safe(s), indent=2))
+        print(json.dumps(json_safe(s), indent=2))
         return 0
     print(f"{df['policy'].iloc[0]} / {args.condition}: {s['episodes']} episodes, success "
           f"{s['success_rate']:.1%}, grasp {s['grasp_success_rate']:.1%}")

@@ -27,6 +27,7 @@ from vgs.assembly.episode import EpisodeRunner, offset_policy
 from vgs.assembly.record import PHASES
 from vgs.config import CellConfig, ExperimentConfig, PegConfig
 from vgs.errors import ConfigError, VGSError
+from vgs.jsonsafe import json_safe
 from vgs.sim.rg2 import PAD_HALF
 
 GRAVITY = 9.81
@@ -240,18 +241,8 @@ def sweep_to_folder(cfg: ExperimentConfig, spec: SweepSpec, out: Path,
     doc = {"profile": cfg.name, "seed": spec.seed, "trials": spec.trials,
            "mass_range": spec.mass_range, "length_range": spec.length_range,
            "offsets": summary}
-    (out / "summary.json").write_text(json.dumps(_json_safe(doc), indent=2) + "\n")
+    (out / "summary.json").write_text(json.dumps(json_safe(doc), indent=2) + "\n")
     return summary
-
-
-def _json_safe(value: Any) -> Any:
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: _json_safe(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_json_safe(v) for v in value]
-    return value
 
 
 def _stat(values: np.ndarray, fn: Any) -> float | None:
