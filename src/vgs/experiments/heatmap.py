@@ -24,6 +24,8 @@ from vgs.experiments.train import episode_seed  # noqa: E402
 from vgs.grasping.agent import GraspAgent  # noqa: E402
 from vgs.grasping.preprocess import peg_mask  # noqa: E402
 
+ZOOM = 0.08  # half-width of the window around the peg [m]
+
 
 def load_run(run_dir: Path) -> tuple[ExperimentConfig, str, GraspAgent, GraspAgent]:
     """Config, mode, untrained agent and trained agent of a training run.
@@ -63,6 +65,12 @@ def plot_heatmaps(run_dir: Path, out: Path, scenes: int = 2, seed: int = 12345) 
             i, j = np.unravel_index(int(np.argmax(masked)), q.shape)
             x, y = hm.pixel_to_world(i, j)
             ax.plot(x, y, "w+", ms=14, mew=2)
+            rows, cols = np.nonzero(mask)
+            if rows.size:  # zoom on the peg: 8 cm around it
+                xs, ys = hm.pixel_to_world(rows, cols)
+                cx, cy = 0.5 * (xs.min() + xs.max()), 0.5 * (ys.min() + ys.max())
+                ax.set_xlim(cx - ZOOM, cx + ZOOM)
+                ax.set_ylim(cy - ZOOM, cy + ZOOM)
             ax.set_title(f"{title} ({mode})")
             ax.set_xlabel("x [m]")
             ax.set_ylabel("y [m]")
