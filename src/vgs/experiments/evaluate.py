@@ -135,8 +135,12 @@ class EpisodeWorker:
         self.policies: dict[str, EvalPolicy] = {}
 
     def policy(self, spec: str) -> EvalPolicy:
+        """The policy of ``spec``; networks go to the GPU when ``train.device`` allows one."""
         if spec not in self.policies:
-            self.policies[spec] = load_policy(spec, self.cfg)
+            import torch
+
+            use_gpu = self.cfg.train.device != "cpu" and torch.cuda.is_available()
+            self.policies[spec] = load_policy(spec, self.cfg, "cuda" if use_gpu else "cpu")
         return self.policies[spec]
 
     def run(self, task: EpisodeTask) -> dict[str, Any]:
