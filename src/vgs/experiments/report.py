@@ -50,14 +50,28 @@ CONDITION_TITLES = {
     "length": "Length 85-115 %, mass following (paper Fig. 10)",
 }
 
-# The paper's numbers (section 4.2). Means are derived: total time / 1000 assemblies.
-PAPER: dict[str, dict[str, tuple[float, float] | float]] = {
-    "nominal": {"time_total_h": (38.46, 33.14), "time_mean_s": (38.46 * 3.6, 33.14 * 3.6),
-                "time_min_s": (106.0, 106.0), "time_max_s": (157.0, 135.0), "gain": 13.83,
-                "episodes": (1000, 1000)},
-    "mass": {"time_std_s": (5.1756, 3.0133), "gain": 12.13, "episodes": (1000, 1000)},
-    "length": {"time_std_s": (6.2242, 3.8508), "gain": 10.92, "episodes": (1000, 1000)},
-}
+
+
+def load_paper_reference() -> dict[str, dict[str, Any]]:
+    """The paper's reported values (section 4.2), for the report's comparison columns only.
+
+    Read from ``paper_reference.json`` beside this module: ``[baseline, VGS]`` pairs and the
+    gain in percent. The nominal means are derived from the totals (h x 3600 / 1000).
+    """
+    raw = json.loads((Path(__file__).with_name("paper_reference.json")).read_text())
+    ref: dict[str, dict[str, Any]] = {}
+    for condition, values in raw.items():
+        if condition.startswith("_"):
+            continue
+        ref[condition] = {k: tuple(v) if isinstance(v, list) else v for k, v in values.items()}
+        if "time_total_h" in ref[condition]:
+            n = ref[condition]["episodes"]
+            ref[condition]["time_mean_s"] = tuple(
+                h * 3600.0 / e for h, e in zip(ref[condition]["time_total_h"], n, strict=True))
+    return ref
+
+
+PAPER = load_paper_reference()
 
 
 # -- statistics ----------------------------------------------------------------------------------
