@@ -164,10 +164,7 @@ class EpisodeWorker:
                                    peg_length=task.peg.length)
             message = " ".join(str(exc).split())[:200]
             record.failure_reason = f"error:{type(exc).__name__}: {message}"
-        return {"job": task.job, "index": task.index, **record.to_row(),
-                "rotation": decision.get("rotation", -1), "row": decision.get("row", -1),
-                "col": decision.get("col", -1), "q_value": decision.get("q_value", math.nan),
-                "wall_s": round(time.perf_counter() - t0, 3)}
+        return _row(task, record, decision, round(time.perf_counter() - t0, 3))
 
 
 _WORKER: EpisodeWorker | None = None
@@ -187,11 +184,19 @@ def _run_in_process(task: EpisodeTask) -> dict[str, Any]:
 # -- backends ------------------------------------------------------------------------------------
 
 
+def _row(task: EpisodeTask, record: EpisodeRecord, decision: dict[str, Any],
+         wall: float) -> dict[str, Any]:
+    """One table row: the task's place, the record, the policy's decision, the wall time."""
+    return {"job": task.job, "index": task.index, **record.to_row(),
+            "rotation": decision.get("rotation", -1), "row": decision.get("row", -1),
+            "col": decision.get("col", -1), "q_value": decision.get("q_value", math.nan),
+            "wall_s": wall}
+
+
 def _lost_row(task: EpisodeTask) -> dict[str, Any]:
     record = EpisodeRecord(seed=task.seed, peg_mass=task.peg.mass, peg_length=task.peg.length)
     record.failure_reason = "worker_lost"
-    return {"job": task.job, "index": task.index, **record.to_row(), "rotation": -1, "row": -1,
-            "col": -1, "q_value": math.nan, "wall_s": math.nan}
+    return _row(task, record, {}, math.nan)
 
 
 def _pool_round(cfg: ExperimentConfig, queue: list[EpisodeTask], workers: int

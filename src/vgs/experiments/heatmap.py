@@ -7,7 +7,6 @@ the rotations, drawn over the colour heightmap, and marks the greedy grasp on th
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import matplotlib
@@ -15,11 +14,10 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-import torch  # noqa: E402
 
 from vgs.assembly.episode import EpisodeRunner  # noqa: E402
-from vgs.config import ExperimentConfig, from_dict  # noqa: E402
-from vgs.errors import ConfigError  # noqa: E402
+from vgs.config import ExperimentConfig  # noqa: E402
+from vgs.experiments.policies import load_trained_agent  # noqa: E402
 from vgs.experiments.train import episode_seed  # noqa: E402
 from vgs.grasping.agent import GraspAgent  # noqa: E402
 from vgs.grasping.preprocess import peg_mask  # noqa: E402
@@ -33,15 +31,8 @@ def load_run(run_dir: Path) -> tuple[ExperimentConfig, str, GraspAgent, GraspAge
     Raises:
         ConfigError: If the folder holds no finished checkpoint.
     """
-    meta_path, ckpt = run_dir / "run.json", run_dir / "checkpoint.pt"
-    if not meta_path.exists() or not ckpt.exists():
-        raise ConfigError("run_dir", f"{run_dir} holds no training run (run.json, checkpoint.pt)")
-    meta = json.loads(meta_path.read_text())
-    cfg = from_dict(ExperimentConfig, meta["config"])
+    cfg, meta, trained, _ = load_trained_agent(run_dir, field="run_dir")
     untrained = GraspAgent(cfg.network, cfg.agent, device="cpu", seed=cfg.seed)
-    trained = GraspAgent(cfg.network, cfg.agent, device="cpu", seed=cfg.seed)
-    saved = torch.load(ckpt, map_location="cpu", weights_only=False)
-    trained.load_state_dict(saved["agent"])
     return cfg, meta["mode"], untrained, trained
 
 

@@ -95,6 +95,28 @@ class RandomPolicy:
         return Decision(pixel_command(hm, i, j, angle), rotation=k, row=i, col=j)
 
 
+def load_trained_agent(run_dir: Path, device: str = "cpu", field: str = "policy"
+                       ) -> tuple[ExperimentConfig, dict[str, Any], Any, int]:
+    """Configuration, ``run.json``, trained agent and episode count of a ``vgs train`` run.
+
+    Raises:
+        ConfigError: ``field`` if the folder holds no run (``run.json`` and ``checkpoint.pt``).
+    """
+    import torch
+
+    from vgs.grasping.agent import GraspAgent
+
+    meta_path, ckpt = run_dir / "run.json", run_dir / "checkpoint.pt"
+    if not meta_path.exists() or not ckpt.exists():
+        raise ConfigError(field, f"{run_dir} holds no training run (run.json and checkpoint.pt)")
+    meta = json.loads(meta_path.read_text())
+    run_cfg = from_dict(ExperimentConfig, meta["config"])
+    saved = torch.load(ckpt, map_location=device, weights_only=False)
+    agent = GraspAgent(run_cfg.network, run_cfg.agent, device=device, seed=run_cfg.seed)
+    agent.load_state_dict(saved["agent"])
+    return run_cfg, meta, agent, int(saved.get("episode", -1))
+
+
 class GreedyPolicy:
     """A trained run's evaluation network acting greedily on the peg pixels.
 
@@ -107,22 +129,9 @@ class GreedyPolicy:
     """
 
     def __init__(self, run_dir: Path, device: str = "cpu") -> None:
-        import torch
-
-        from vgs.grasping.agent import GraspAgent
-
-        meta_path, ckpt = run_dir / "run.json", run_dir / "checkpoint.pt"
-        if not meta_path.exists() or not ckpt.exists():
-            raise ConfigError("policy", f"{run_dir} holds no training run "
-                                        "(run.json and checkpoint.pt)")
-        meta = json.loads(meta_path.read_text())
-        run_cfg = from_dict(ExperimentConfig, meta["config"])
-        saved = torch.load(ckpt, map_location=device, weights_only=False)
-        self.agent = GraspAgent(run_cfg.network, run_cfg.agent, device=device, seed=run_cfg.seed)
-        self.agent.load_state_dict(saved["agent"])
+        self.run_config, meta, self.agent, self.trained_episodes = load_trained_agent(
+            run_dir, device)
         self.label = str(meta["mode"])
-        self.trained_episodes = int(saved.get("episode", -1))
-        self.run_config = run_cfg
 
     def __call__(self, hm: Heightmap, rng: np.random.Generator) -> Decision:
         action = self.agent.act(hm.color, hm.depth, 0.0, peg_mask(hm.depth), rng)

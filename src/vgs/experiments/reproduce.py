@@ -133,10 +133,10 @@ class Reproduction:
         self._stage("train", t0)
 
     def _trained(self, folder: Path) -> bool:
-        ckpt = folder / "episodes.csv"
-        if not ckpt.exists() or not (folder / "convergence.json").exists():
+        table = folder / "episodes.csv"
+        if not table.exists() or not (folder / "convergence.json").exists():
             return False
-        return len(pd.read_csv(ckpt)) >= self.cfg.train.episodes
+        return len(pd.read_csv(table)) >= self.cfg.train.episodes
 
     def evaluate(self) -> None:
         """Stage 2: every policy on every condition."""

@@ -50,6 +50,7 @@ from vgs.assembly.episode import EpisodeRunner, GraspCommand
 from vgs.assembly.record import EpisodeRecord
 from vgs.config import ExperimentConfig, from_dict, to_dict
 from vgs.errors import ConfigError, VGSError
+from vgs.experiments.policies import pixel_command
 from vgs.grasping.agent import DeltaQMonitor, GraspAction, GraspAgent
 from vgs.grasping.preprocess import peg_mask
 from vgs.grasping.replay import ReplayBuffer, Transition
@@ -70,14 +71,8 @@ def episode_seed(root: int, episode: int) -> int:
 
 
 def action_to_command(action: GraspAction, hm: Heightmap) -> GraspCommand:
-    """World grasp of a pixel-wise action.
-
-    The network's closing direction of rotation k is ``(cos theta_k, sin theta_k)`` in
-    (column, row) pixel axes, which are the world (x, y) axes of the heightmap; the grasp
-    primitive takes the heading of the pads' long side, perpendicular to the closing direction.
-    """
-    x, y = hm.pixel_to_world(action.row, action.col)
-    return GraspCommand(float(x), float(y), float(action.angle - math.pi / 2))
+    """World grasp of a pixel-wise action (:func:`vgs.experiments.policies.pixel_command`)."""
+    return pixel_command(hm, action.row, action.col, action.angle)
 
 
 def resolve_device(name: str) -> str:
