@@ -16,6 +16,11 @@ Every figure is measured twice: with the wall clock and with this process's CPU 
 idle core the two agree; when other processes share the core, the CPU-time figures are what an
 idle core would give, and the wall-clock ones show the slowdown.
 
+``--timers`` then runs the same episodes again with MuJoCo's internal timers on
+(``mujoco.set_mjcb_time``) and prints where the time inside ``mj_step`` goes, per stage, in
+microseconds per step (the timer callback itself costs time, so these runs are not used for the
+figures above).
+
 Targets on one core of the project machine: real-time factor >= 20, overhead <= 30 %.
 Figures only, no assertions.
 """
@@ -150,6 +155,49 @@ def assemblies(episodes: int, cfg: ExperimentConfig, seed: int) -> AssemblyTimin
     return AssemblyTiming(episodes, successes, sim, total, timer)
 
 
+# Stages of mj_step timed by MuJoCo (engine_forward.c); the collision and position stages nest
+# inside "position", which nests inside "forward".
+STAGES = (
+    ("step", "mjTIMER_STEP"),
+    ("  kinematics", "mjTIMER_POS_KINEMATICS"),
+    ("  inertia", "mjTIMER_POS_INERTIA"),
+    ("  collision, broad phase", "mjTIMER_COL_BROAD"),
+    ("  collision, narrow phase", "mjTIMER_COL_NARROW"),
+    ("  constraint set-up", "mjTIMER_POS_MAKE"),
+    ("  constraint projection", "mjTIMER_POS_PROJECT"),
+    ("  velocity", "mjTIMER_VELOCITY"),
+    ("  actuation", "mjTIMER_ACTUATION"),
+    ("  constraint solver", "mjTIMER_CONSTRAINT"),
+    ("  integration", "mjTIMER_ADVANCE"),
+)
+
+
+def stage_times(episodes: int, cfg: ExperimentConfig, seed: int) -> tuple[dict[str, float], int]:
+    """Seconds per stage of ``mj_step`` (MuJoCo's timers) over whole episodes, and the steps."""
+    runner = EpisodeRunner(cfg)
+    cell, _ = runner.cell(cfg.cell.peg)
+    totals = {name: 0.0 for _, name in STAGES}
+    steps = 0
+    mujoco.set_mjcb_time(time.perf_counter)
+    try:
+        for k in range(episodes):
+            runner.run(seed + k, center_policy())  # reset clears the timers
+            for _, name in STAGES:
+                totals[name] += cell.data.timer[int(getattr(mujoco.mjtTimer, name))].duration
+            steps += cell.data.timer[int(mujoco.mjtTimer.mjTIMER_STEP)].number
+    finally:
+        mujoco.set_mjcb_time(None)
+    return totals, steps
+
+
+def report_stages(totals: dict[str, float], steps: int) -> None:
+    step = totals["mjTIMER_STEP"]
+    print(f"inside mj_step (MuJoCo timers, {steps:,} steps; the timer callback adds overhead):")
+    for label, name in STAGES:
+        print(f"  {label:34s}{1e6 * totals[name] / steps:8.1f} us/step"
+              f"{100 * totals[name] / step:7.1f} %")
+
+
 def report(still: Clock, steps: int, r: AssemblyTiming, timestep: float) -> None:
     """Print the figures, CPU-time based and wall-clock based."""
     t = r.timer
@@ -186,6 +234,8 @@ def main() -> None:
     parser.add_argument("--profile", default="paper")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--all-cores", action="store_true", help="do not pin to one core")
+    parser.add_argument("--timers", action="store_true",
+                        help="also print the stages of mj_step (MuJoCo's timers)")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="configuration override (JSON value), e.g. "
                              "cell.sim.noslip_iterations=1; repeatable")
@@ -202,6 +252,8 @@ def main() -> None:
     still = steps_holding_still(args.steps, cfg)
     timing = assemblies(args.episodes, cfg, args.seed)
     report(still, args.steps, timing, cfg.cell.sim.timestep)
+    if args.timers:
+        report_stages(*stage_times(args.episodes, cfg, args.seed))
 
 
 if __name__ == "__main__":

@@ -144,3 +144,35 @@ def test_bad_input_is_a_config_error(cfg, tmp_path) -> None:
     with pytest.raises(ConfigError, match="another evaluation"):
         evaluate(cfg, EvalSpec(f"{POLICIES}:raising", "mass", 1), tmp_path / "a",
                  progress=False)
+
+
+def test_heuristic_workers_start_without_torch() -> None:
+    """A worker of the centre policy never imports torch (it would add seconds to each worker's
+    start-up); a training run's policy does."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys\n"
+        "from vgs.config import profile\n"
+        "from vgs.experiments.evaluate import EpisodeWorker, plan_episodes\n"
+        "cfg = profile('smoke')\n"
+        "worker = EpisodeWorker(cfg)\n"
+        "worker.policy('center')\n"
+        "print('torch' in sys.modules)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    assert out.stdout.strip() == "False"
+
+
+def test_network_worker_uses_one_torch_thread(cfg, run_dir: Path) -> None:
+    from vgs.experiments.evaluate import EpisodeWorker
+
+    threads = torch.get_num_threads()
+    try:
+        torch.set_num_threads(2)
+        EpisodeWorker(cfg).policy(str(run_dir))
+        assert torch.get_num_threads() == 1
+    finally:
+        torch.set_num_threads(threads)

@@ -35,6 +35,7 @@ import json
 import math
 import multiprocessing as mp
 import os
+import sys
 import time
 from collections.abc import Callable, Generator, Iterator
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
@@ -51,7 +52,7 @@ from vgs.assembly.episode import EpisodeRunner
 from vgs.assembly.record import EpisodeRecord
 from vgs.config import ExperimentConfig, PegConfig, to_dict
 from vgs.errors import ConfigError, VGSError
-from vgs.experiments.policies import EvalPolicy, load_policy, policy_label
+from vgs.experiments.policies import EvalPolicy, is_run_dir, load_policy, policy_label
 
 CONDITIONS = ("nominal", "mass", "length")
 BACKENDS = ("local", "ray")
@@ -127,20 +128,29 @@ class EpisodeWorker:
     """
 
     def __init__(self, cfg: ExperimentConfig) -> None:
-        import torch
-
-        torch.set_num_threads(1)
         self.cfg = cfg
         self.runner = EpisodeRunner(cfg)
         self.policies: dict[str, EvalPolicy] = {}
 
     def policy(self, spec: str) -> EvalPolicy:
-        """The policy of ``spec``; networks go to the GPU when ``train.device`` allows one."""
-        if spec not in self.policies:
-            import torch
+        """The policy of ``spec``; networks go to the GPU when ``train.device`` allows one.
 
-            use_gpu = self.cfg.train.device != "cpu" and torch.cuda.is_available()
-            self.policies[spec] = load_policy(spec, self.cfg, "cuda" if use_gpu else "cpu")
+        Torch is imported only for a policy that needs it (a training run, or a user policy that
+        imports it), so workers of the heuristic policies start in about a second; where it is
+        loaded it runs on one thread.
+        """
+        if spec not in self.policies:
+            device = "cpu"
+            if is_run_dir(spec):
+                import torch
+
+                torch.set_num_threads(1)
+                if self.cfg.train.device != "cpu" and torch.cuda.is_available():
+                    device = "cuda"
+            self.policies[spec] = load_policy(spec, self.cfg, device)
+            torch_module = sys.modules.get("torch")
+            if torch_module is not None:
+                torch_module.set_num_threads(1)
         return self.policies[spec]
 
     def run(self, task: EpisodeTask) -> dict[str, Any]:

@@ -29,8 +29,7 @@ import numpy as np
 from vgs.assembly.episode import GraspCommand, center_policy
 from vgs.config import ExperimentConfig, from_dict
 from vgs.errors import ConfigError
-from vgs.grasping.network import rotation_angle
-from vgs.grasping.preprocess import peg_mask
+from vgs.grasping.actions import peg_mask, rotation_angle
 from vgs.sim.camera import Heightmap
 
 HEURISTICS = ("center", "random")

@@ -56,6 +56,7 @@ from torch import Tensor, nn
 
 from vgs.config import NetworkConfig
 from vgs.errors import ConfigError
+from vgs.grasping.actions import jaw_axis, rotation_angle
 from vgs.grasping.densenet import DenseNet121Trunk, load_trunk_weights
 from vgs.grasping.light import LightTrunk
 from vgs.grasping.preprocess import color_fill_value, depth_fill_value
@@ -65,29 +66,6 @@ PAD_MULTIPLE = 32
 HEAD_WIDTHS = (64, 32)
 ANGLE_CHANNELS = 4
 ALIGN_CORNERS = False
-
-
-def rotation_angle(k: int, num_rotations: int) -> float:
-    """Angle theta_k = 2 * pi * k / R of rotation index k [rad].
-
-    Raises:
-        ConfigError: ``network.rotation`` if k is not in [0, R).
-    """
-    if num_rotations < 1:
-        raise ConfigError("network.num_rotations", "must be >= 1")
-    if not 0 <= k < num_rotations:
-        raise ConfigError("network.rotation", f"index {k} outside [0, {num_rotations})")
-    return 2.0 * math.pi * k / num_rotations
-
-
-def jaw_axis(k: int, num_rotations: int) -> tuple[float, float]:
-    """Closing direction (d_col, d_row) = (cos theta_k, sin theta_k) of rotation k in pixels.
-
-    Pixel coordinates have the column axis to the right and the row axis downward; the gripper
-    is symmetric, so k and k + R/2 describe the same physical grasp.
-    """
-    theta = rotation_angle(k, num_rotations)
-    return math.cos(theta), math.sin(theta)
 
 
 def padded_size(height: int, width: int) -> int:

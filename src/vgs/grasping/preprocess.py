@@ -19,6 +19,7 @@ from torch import Tensor
 
 from vgs.config import NetworkConfig
 from vgs.errors import ConfigError
+from vgs.grasping.actions import check_depth, peg_mask
 
 IMAGENET_MEAN = (0.485, 0.456, 0.406)
 IMAGENET_STD = (0.229, 0.224, 0.225)
@@ -29,15 +30,6 @@ def _check_color(color: np.ndarray) -> None:
         raise ConfigError("heightmap.color", "must be a numpy uint8 array")
     if color.ndim != 3 or color.shape[2] != 3:
         raise ConfigError("heightmap.color", f"must have shape (H, W, 3), got {color.shape}")
-
-
-def _check_depth(depth: np.ndarray) -> None:
-    if not isinstance(depth, np.ndarray) or not np.issubdtype(depth.dtype, np.floating):
-        raise ConfigError("heightmap.depth", "must be a numpy float array")
-    if depth.ndim != 2:
-        raise ConfigError("heightmap.depth", f"must have shape (H, W), got {depth.shape}")
-    if not np.all(np.isfinite(depth)):
-        raise ConfigError("heightmap.depth", "contains NaN or infinite heights")
 
 
 def normalize_color(color: np.ndarray) -> Tensor:
@@ -72,7 +64,7 @@ def normalize_depth(depth: np.ndarray, cfg: NetworkConfig) -> Tensor:
     Raises:
         ConfigError: ``heightmap.depth`` on a wrong dtype or shape or a non-finite height.
     """
-    _check_depth(depth)
+    check_depth(depth)
     d = (torch.from_numpy(np.asarray(depth, dtype=np.float32)) - cfg.depth_mean) / cfg.depth_std
     return d.view(1, 1, *d.shape).expand(1, 3, *d.shape).contiguous()
 
@@ -103,7 +95,7 @@ def check_heightmaps(color: np.ndarray, depth: np.ndarray) -> None:
             non-finite height, or different sizes.
     """
     _check_color(color)
-    _check_depth(depth)
+    check_depth(depth)
     if color.shape[:2] != depth.shape:
         raise ConfigError(
             "heightmap.depth", f"size {depth.shape} differs from the colour map's {color.shape[:2]}"
@@ -118,25 +110,6 @@ def color_fill_value() -> tuple[float, float, float]:
 def depth_fill_value(cfg: NetworkConfig) -> float:
     """Normalised value of table height 0, (0 - depth_mean) / depth_std (padding value)."""
     return -cfg.depth_mean / cfg.depth_std
-
-
-def peg_mask(depth: np.ndarray, min_height: float = 0.005) -> np.ndarray:
-    """Pixels on the object: height above the table strictly greater than ``min_height``.
-
-    Args:
-        depth: Height above the table [m], float (H, W).
-        min_height: Threshold [m]; must be >= 0.
-
-    Returns:
-        Boolean array (H, W).
-
-    Raises:
-        ConfigError: ``heightmap.depth`` on a bad map, ``peg_mask.min_height`` if negative.
-    """
-    _check_depth(depth)
-    if not (np.isfinite(min_height) and min_height >= 0):
-        raise ConfigError("peg_mask.min_height", f"must be >= 0, got {min_height!r}")
-    return np.asarray(depth > min_height, dtype=bool)
 
 
 __all__ = [
