@@ -6,7 +6,9 @@ Prints
 
 * episodes per second of ``evaluate`` with 1 and 2 local worker processes on the same test
   episodes (centre grasp, nominal peg), and the scaling efficiency
-  ``(episodes/s with 2) / (2 x episodes/s with 1)`` (target >= 0.8 on a 2-core machine);
+  ``(episodes/s with 2) / (2 x episodes/s with 1)`` (target >= 0.8 on a 2-core machine), and a
+  machine probe: how much slower MuJoCo alone steps the cell when two processes do it at once
+  (what the machine takes from each worker, whatever vgs does);
 * Ray's wall time over local processes' for the same episodes with 2 workers (start-up of the
   local Ray instance included, and without it);
 * the wall time of ``vgs reproduce --profile quick`` (``--quick`` runs it in a subprocess;
@@ -52,6 +54,34 @@ def throughput(episodes: int, workers: int, backend: str, seed: int = 7) -> tupl
                               progress=False)
         wall = time.perf_counter() - t0
     return wall, float(df["wall_s"].sum())
+
+
+def _step_cell(steps: int) -> float:
+    """CPU-bound probe: seconds to step the cell ``steps`` times, the arm holding still."""
+    import mujoco
+
+    from vgs.sim.cell import HOME_Q, Cell
+
+    cfg = profile("paper")
+    cell = Cell(cfg.cell, cfg.controller.joint_kp, cfg.controller.joint_kv)
+    cell.reset(np.random.default_rng(0))
+    cell.data.ctrl[cell.ids.arm_act] = HOME_Q
+    t0 = time.perf_counter()
+    mujoco.mj_step(cell.model, cell.data, steps)
+    return time.perf_counter() - t0
+
+
+def machine_contention(steps: int = 60_000) -> float:
+    """Slowdown of MuJoCo alone when two processes step the cell at once (1.00 = none): what
+    this machine takes from each worker when both cores are busy, whatever vgs does."""
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(2, mp_context=mp.get_context("spawn")) as pool:
+        pool.submit(_step_cell, 100).result()  # start-up outside the timing
+        alone = pool.submit(_step_cell, steps).result()
+        both = [f.result() for f in [pool.submit(_step_cell, steps) for _ in range(2)]]
+    return float(np.mean(both)) / alone
 
 
 def ray_startup() -> float:
@@ -132,6 +162,8 @@ def main() -> None:
     print(f"scaling efficiency at 2 workers: {eps2 / (2 * eps1):.2f} (target >= 0.8)")
     print(f"  per-episode time with 2 workers / with 1: {s2 / s1:.2f} "
           "(1.00 = no slowdown from sharing the machine)")
+    print(f"  machine probe, MuJoCo alone in 2 processes at once / in 1: "
+          f"{machine_contention():.2f}")
     if not args.no_ray:
         try:
             wr, _ = throughput(args.episodes, 2, "ray")
