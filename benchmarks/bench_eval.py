@@ -18,7 +18,7 @@ Prints
   network time removed), one training step and one greedy decision of each backbone at the
   paper's settings (R = 16, 224 x 224), and the measured evaluation throughput
   (targets: 8 h with DenseNet-121, 3 h with the light backbone; the features rotation mode of
-  DenseNet-121 is listed too).
+  DenseNet-121 and ``network.precision = bfloat16`` are listed too).
 
 One worker runs in this process; two workers are a spawned process pool, whose start-up
 (imports, cell compilation) counts against them.
@@ -94,8 +94,8 @@ def ray_startup() -> float:
     return time.perf_counter() - t0
 
 
-def network_step_seconds(backbone: str, threads: int, rotate: str = "input"
-                         ) -> tuple[float, float]:
+def network_step_seconds(backbone: str, threads: int, rotate: str = "input",
+                         precision: str = "float32") -> tuple[float, float]:
     """(one training update incl. one replay, one greedy decision) at R = 16, 224 px [s]."""
     import torch
 
@@ -104,8 +104,8 @@ def network_step_seconds(backbone: str, threads: int, rotate: str = "input"
     from vgs.grasping.replay import ReplayBuffer, Transition
 
     torch.set_num_threads(threads)
-    agent = GraspAgent(NetworkConfig(backbone=backbone, num_rotations=16, rotate=rotate),
-                       AgentConfig())
+    agent = GraspAgent(NetworkConfig(backbone=backbone, num_rotations=16, rotate=rotate,
+                                     precision=precision), AgentConfig())
     rng = np.random.default_rng(0)
     color = rng.integers(0, 255, (224, 224, 3), dtype=np.uint8)
     depth = np.zeros((224, 224), np.float32)
@@ -199,16 +199,21 @@ def main() -> None:
           f"{n_eval} test and {n_sweep} sweep episodes, {cores} cores):")
     print(f"  measured: simulation {sim_train:.2f} s per training episode, {sim_eval:.2f} s "
           "per test episode (one process each)")
-    for backbone, rotate in (("densenet121", "input"), ("densenet121", "features"),
-                             ("light", "input")):
-        update, decide = network_step_seconds(backbone, max(1, cores // 2), rotate)
+    for backbone, rotate, precision in (("densenet121", "input", "float32"),
+                                        ("densenet121", "input", "bfloat16"),
+                                        ("densenet121", "features", "float32"),
+                                        ("densenet121", "features", "bfloat16"),
+                                        ("light", "input", "float32"),
+                                        ("light", "input", "bfloat16")):
+        update, decide = network_step_seconds(backbone, max(1, cores // 2), rotate, precision)
         per_train = sim_train + update + greedy_share * decide
         parallel = min(cores, 2 * len(paper.reproduce.train_seeds))
         train_h = 2 * len(paper.reproduce.train_seeds) * paper.train.episodes * per_train \
             / parallel / 3600
         eval_h = (n_eval * (sim_eval + decide * 2 / 3) + n_sweep * sim_eval) / cores / 3600
         target = 8 if backbone == "densenet121" else 3
-        print(f"  {backbone:<11} rotate={rotate:<8}: update {update:.2f} s, decision "
+        print(f"  {backbone:<11} rotate={rotate:<8} {precision:<8}: update {update:.2f} s, "
+              f"decision "
               f"{decide:.2f} s -> training {train_h:.1f} h + evaluation {eval_h:.1f} h = "
               f"{train_h + eval_h:.1f} h (target {target} h)")
 

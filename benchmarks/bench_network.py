@@ -13,7 +13,8 @@ Usage::
 
     python benchmarks/bench_network.py [--backbones densenet121 light] [--rotations 16]
         [--device cpu|cuda] [--rotate input features] [--memory-format contiguous channels_last]
-        [--threads N] [--size 224] [--repeats 3] [--warmup 1] [--json PATH]
+        [--precision float32 bfloat16] [--threads N] [--size 224] [--repeats 3] [--warmup 1]
+        [--json PATH]
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from vgs.config import BACKBONES, AgentConfig, NetworkConfig
+from vgs.config import BACKBONES, PRECISIONS, AgentConfig, NetworkConfig
 from vgs.grasping.agent import GraspAgent
 from vgs.grasping.network import ROTATE_MODES
 from vgs.grasping.replay import Transition
@@ -86,10 +87,11 @@ def bench_one(
     device: str,
     repeats: int,
     warmup: int,
+    precision: str = "float32",
 ) -> dict[str, Any]:
     """Decision and training-step times of one configuration [s]."""
     agent = GraspAgent(
-        NetworkConfig(backbone=backbone, num_rotations=rotations),
+        NetworkConfig(backbone=backbone, num_rotations=rotations, precision=precision),
         AgentConfig(),
         device=device,
         rotate=rotate,
@@ -107,6 +109,7 @@ def bench_one(
         "backbone": backbone,
         "rotate": rotate,
         "memory_format": memory_format,
+        "precision": precision,
         "rotations": rotations,
         "size": size,
         "device": device,
@@ -130,6 +133,8 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     parser.add_argument("--rotate", nargs="+", choices=ROTATE_MODES, default=list(ROTATE_MODES))
     parser.add_argument("--memory-format", nargs="+", choices=MEMORY_FORMATS,
                         default=list(MEMORY_FORMATS))
+    parser.add_argument("--precision", nargs="+", choices=PRECISIONS, default=["float32"],
+                        help="network.precision values to time (default: float32)")
     parser.add_argument("--threads", type=int, default=None,
                         help="torch.set_num_threads (default: leave torch's choice)")
     parser.add_argument("--size", type=int, default=224)
@@ -146,7 +151,7 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
           f"heightmap {args.size}x{args.size}, R = {args.rotations}, median of {args.repeats} "
           f"after {args.warmup} warm-up")
     print(f"load average before: {_load()}")
-    header = (f"{'backbone':<12} {'rotate':<9} {'memory':<14} {'threads':>7} "
+    header = (f"{'backbone':<12} {'rotate':<9} {'memory':<14} {'precision':<9} {'threads':>7} "
               f"{'decision [s]':>13} {'(cpu [s])':>10} {'train step [s]':>15} {'(cpu [s])':>10}")
     print(header)
     print("-" * len(header))
@@ -154,12 +159,14 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     for backbone in args.backbones:
         for rotate in args.rotate:
             for memory_format in args.memory_format:
-                r = bench_one(backbone, rotate, memory_format, args.rotations, args.size,
-                              args.device, args.repeats, args.warmup)
-                results.append(r)
-                print(f"{backbone:<12} {rotate:<9} {memory_format:<14} {r['threads']:>7} "
-                      f"{r['decision_s']:>13.3f} {r['decision_cpu_s']:>10.3f} "
-                      f"{r['train_step_s']:>15.3f} {r['train_step_cpu_s']:>10.3f}", flush=True)
+                for precision in args.precision:
+                    r = bench_one(backbone, rotate, memory_format, args.rotations, args.size,
+                                  args.device, args.repeats, args.warmup, precision)
+                    results.append(r)
+                    print(f"{backbone:<12} {rotate:<9} {memory_format:<14} {precision:<9} "
+                          f"{r['threads']:>7} {r['decision_s']:>13.3f} "
+                          f"{r['decision_cpu_s']:>10.3f} {r['train_step_s']:>15.3f} "
+                          f"{r['train_step_cpu_s']:>10.3f}", flush=True)
     print(f"load average after: {_load()}")
     if args.json is not None:
         args.json.write_text(json.dumps(results, indent=2))

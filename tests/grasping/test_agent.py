@@ -224,3 +224,26 @@ def test_delta_q_monitor() -> None:
     assert clone.converged and clone.window == 3
     with pytest.raises(ConfigError):
         DeltaQMonitor(0.0, 3)
+
+
+def test_bfloat16_precision_q_values_and_update() -> None:
+    """bfloat16 autocast: float32 Q maps within bfloat16 rounding of the float32 ones (same
+    weights), float32 weights after an update, a finite loss."""
+    color, depth = _maps(0)
+    exact = _agent(seed=3)
+    fast = GraspAgent(NetworkConfig(backbone="light", num_rotations=4, precision="bfloat16"),
+                      AgentConfig(), seed=3)
+    assert _same(_params(exact.eva_net), _params(fast.eva_net))
+    q32, q16 = exact.q_values(color, depth), fast.q_values(color, depth)
+    assert q16.dtype == np.float32
+    assert not np.array_equal(q32, q16)  # the forward pass did run in bfloat16
+    scale = float(np.abs(q32).max())
+    assert float(np.abs(q32 - q16).max()) < 0.05 * scale
+    stats = fast.update(Transition(color, depth, (1, 10, 10), 1.0))
+    assert np.isfinite(stats["loss"])
+    assert all(p.dtype == torch.float32 for p in fast.eva_net.parameters())
+
+
+def test_precision_is_checked() -> None:
+    with pytest.raises(ConfigError, match="network.precision"):
+        NetworkConfig(precision="float16")

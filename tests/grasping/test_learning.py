@@ -22,3 +22,11 @@ def test_flipped_reward_is_not_mistaken_for_learning() -> None:
     s = score(agent, rng)
     assert not learned(s), s
     assert s.hits <= 2, s  # it learned the other half instead
+
+
+def test_bfloat16_forward_passes_learn_too() -> None:
+    """``network.precision = bfloat16`` (autocast forward passes, float32 weights and loss)
+    learns the toy task as float32 does."""
+    agent, rng = train_toy(precision="bfloat16")
+    s = score(agent, rng)
+    assert learned(s), s

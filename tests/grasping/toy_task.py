@@ -55,6 +55,7 @@ def train_toy(
     flip: bool = False,
     episodes: int = EPISODES,
     seed: int = 1,
+    precision: str = "float32",
 ) -> tuple[GraspAgent, np.random.Generator]:
     """Train a light-backbone agent on the toy task; ``flip`` pays the other half instead.
 
@@ -62,7 +63,7 @@ def train_toy(
     only accepts positive rates, so the optimiser's rate is zeroed after construction.
     """
     agent = GraspAgent(
-        NetworkConfig(backbone="light", num_rotations=ROTATIONS),
+        NetworkConfig(backbone="light", num_rotations=ROTATIONS, precision=precision),
         AgentConfig(learning_rate=learning_rate or 1e-4, target_update_period=10,
                     replay_batch=1),
         seed=seed,

@@ -35,8 +35,8 @@ from typing import Any
 
 import pandas as pd
 
-from vgs.config import ExperimentConfig, to_dict
-from vgs.errors import ConfigError
+from vgs.config import ExperimentConfig, from_dict, to_dict
+from vgs.errors import ConfigError, VGSError
 from vgs.experiments.evaluate import EvalSpec, evaluate_many, summarize
 from vgs.experiments.report import build_report
 from vgs.experiments.train import git_revision, train
@@ -57,6 +57,18 @@ def _train_job(args: tuple[ExperimentConfig, str, str, bool, int, int]) -> str:
     cfg, mode, out, progress, threads, position = args
     return str(train(cfg, mode, Path(out), progress=progress, threads=threads,
                      position=position))
+
+
+def same_config(saved: Any, cfg: ExperimentConfig) -> bool:
+    """Whether a saved configuration (``to_dict`` output) is ``cfg``. Fields added to vgs since
+    it was saved take their defaults, so a folder stays resumable across such additions."""
+    if not isinstance(saved, dict):
+        return False
+    try:
+        saved_cfg = from_dict(ExperimentConfig, saved)
+    except (TypeError, VGSError):
+        return False
+    return json.dumps(to_dict(saved_cfg)) == json.dumps(to_dict(cfg))
 
 
 class Reproduction:
@@ -90,7 +102,7 @@ class Reproduction:
         self.meta: dict[str, Any] = {}
         if self.meta_path.exists():
             self.meta = json.loads(self.meta_path.read_text())
-            if json.dumps(self.meta.get("config")) != json.dumps(to_dict(cfg)):
+            if not same_config(self.meta.get("config"), cfg):
                 raise ConfigError("out", f"{out} holds a reproduction with another "
                                          "configuration; use a new folder or the same flags")
         self.meta.update({"profile": cfg.name, "config": to_dict(cfg), "machine": machine(),

@@ -43,6 +43,7 @@ pixels.
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import math
 from collections import deque
@@ -250,13 +251,20 @@ class GraspAgent:
         c, d = preprocess(color, depth, self.network_cfg)
         return c.to(self.device), d.to(self.device)
 
+    def _autocast(self) -> contextlib.AbstractContextManager[Any]:
+        """``torch.autocast`` in bfloat16 when ``network.precision`` asks for it, else nothing."""
+        if self.network_cfg.precision == "bfloat16":
+            return torch.autocast(device_type=self.device.type, dtype=torch.bfloat16)
+        return contextlib.nullcontext()
+
     def q_values(self, color: np.ndarray, depth: np.ndarray, target: bool = False) -> np.ndarray:
-        """Q map (R, H, W) of the evaluation (or target) network in eval mode, no gradients."""
+        """Q map (R, H, W), float32, of the evaluation (or target) network in eval mode, no
+        gradients."""
         net = self.target_net if target else self.eva_net
         c, d = self._inputs(color, depth)
         was_training = net.training
         net.eval()
-        with torch.inference_mode():
+        with torch.inference_mode(), self._autocast():
             q = net(c, d)[0].float().cpu().numpy()
         net.train(was_training)
         return q
@@ -349,7 +357,9 @@ class GraspAgent:
         rotations = [k] if opposite is None or opposite == k else [k, opposite]
         c, d = self._inputs(transition.color, transition.depth)
         self.eva_net.train()
-        q = self.eva_net(c, d, rotations=rotations)[0]
+        with self._autocast():
+            q = self.eva_net(c, d, rotations=rotations)[0]
+        q = q.float()  # the loss in float32 whatever the forward pass ran in
         loss = td_loss(q, range(len(rotations)), row, col, y)
         q_eva = float(q[0, row, col].detach())
         self.optimizer.zero_grad(set_to_none=True)

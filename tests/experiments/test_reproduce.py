@@ -1,0 +1,31 @@
+"""Resuming a reproduction folder: which saved configurations count as the same."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from vgs.config import override, profile, to_dict
+from vgs.errors import ConfigError
+from vgs.experiments.reproduce import Reproduction, same_config
+
+
+def test_fields_added_later_take_their_defaults() -> None:
+    """A folder saved before a field existed (here network.precision) stays resumable."""
+    cfg = profile("quick")
+    saved = to_dict(cfg)
+    del saved["network"]["precision"]
+    assert same_config(saved, cfg)
+    assert not same_config(saved, override(cfg, "network.precision", "bfloat16"))
+
+
+def test_other_configurations_are_refused(tmp_path: Path) -> None:
+    cfg = profile("smoke")
+    assert not same_config(to_dict(cfg), override(cfg, "train.episodes", 7))
+    assert not same_config({"no_such_field": 1}, cfg)
+    assert not same_config(None, cfg)
+    Reproduction(cfg, tmp_path, workers=1, progress=False)  # writes reproduce.json
+    Reproduction(cfg, tmp_path, workers=1, progress=False)  # the same: resumes
+    with pytest.raises(ConfigError, match="another configuration"):
+        Reproduction(override(cfg, "train.episodes", 7), tmp_path, workers=1, progress=False)
