@@ -11,11 +11,12 @@ CPU) and ``paper`` (the paper's budget: 5000 training grasps, 1000 test assembli
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 from dataclasses import dataclass, field, fields, is_dataclass, replace
 from typing import Any
 
-from vgs.errors import ConfigError
+from vgs.errors import ConfigError, VGSError
 
 
 def _positive(obj: Any, *names: str, prefix: str = "") -> None:
@@ -696,3 +697,20 @@ def from_dict(cls: type, data: dict[str, Any]) -> Any:
             value = tuple(tuple(v) if isinstance(v, list) else v for v in value)
         kwargs[f.name] = value
     return cls(**kwargs)
+
+
+def same_config(saved: Any, cfg: Any) -> bool:
+    """Whether ``saved`` (:func:`to_dict` output, e.g. read from a run's JSON) describes ``cfg``.
+
+    Fields added to vgs since ``saved`` was written take their defaults, so folders made by an
+    earlier version stay resumable as long as nothing they recorded differs. Unknown fields or
+    values the dataclasses reject make it a different configuration.
+    """
+    if not isinstance(saved, dict):
+        return False
+    try:
+        saved_cfg = from_dict(type(cfg), saved)
+    except (TypeError, ValueError, VGSError):
+        return False
+    return json.dumps(to_dict(saved_cfg)) == json.dumps(to_dict(cfg))
+

@@ -176,3 +176,28 @@ def test_network_worker_uses_one_torch_thread(cfg, run_dir: Path) -> None:
         assert torch.get_num_threads() == 1
     finally:
         torch.set_num_threads(threads)
+
+
+def test_a_run_that_trained_on_is_another_policy(cfg, tmp_path: Path) -> None:
+    """Rows of a checkpoint are not resumed with a later checkpoint of the same run."""
+    import shutil
+
+    run = tmp_path / "run"
+    run.mkdir()
+    agent = GraspAgent(cfg.network, cfg.agent, seed=5)
+    (run / "run.json").write_text(json.dumps({"mode": "vgs", "config": to_dict(cfg)}))
+    torch.save({"agent": agent.state_dict(), "episode": 3}, run / "checkpoint.pt")
+    out = tmp_path / "eval"
+    spec = EvalSpec(str(run), "nominal", 1, seed=2)
+    evaluate(cfg, spec, out, progress=False)
+    meta = json.loads((out / "meta.json").read_text())
+    assert meta["policy_trained_episodes"] == 3
+    evaluate(cfg, spec, out, progress=False)  # the same checkpoint: resumes
+    torch.save({"agent": agent.state_dict(), "episode": 9}, run / "checkpoint.pt")
+    with pytest.raises(ConfigError, match="policy_trained_episodes"):
+        evaluate(cfg, spec, out, progress=False)
+    # folders written before the count was recorded resume as before
+    del meta["policy_trained_episodes"]
+    (out / "meta.json").write_text(json.dumps(meta))
+    evaluate(cfg, spec, out, progress=False)
+    shutil.rmtree(out)

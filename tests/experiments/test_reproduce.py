@@ -6,9 +6,9 @@ from pathlib import Path
 
 import pytest
 
-from vgs.config import override, profile, to_dict
+from vgs.config import override, profile, same_config, to_dict
 from vgs.errors import ConfigError
-from vgs.experiments.reproduce import Reproduction, same_config
+from vgs.experiments.reproduce import Reproduction
 
 
 def test_fields_added_later_take_their_defaults() -> None:
@@ -29,3 +29,10 @@ def test_other_configurations_are_refused(tmp_path: Path) -> None:
     Reproduction(cfg, tmp_path, workers=1, progress=False)  # the same: resumes
     with pytest.raises(ConfigError, match="another configuration"):
         Reproduction(override(cfg, "train.episodes", 7), tmp_path, workers=1, progress=False)
+
+
+def test_evaluate_stage_refuses_unfinished_training(tmp_path: Path) -> None:
+    """Evaluating before training ends would keep half-trained rows on resume."""
+    rep = Reproduction(profile("smoke"), tmp_path, workers=1, progress=False)
+    with pytest.raises(ConfigError, match="training has not finished"):
+        rep.evaluate()

@@ -50,7 +50,7 @@ from tqdm import tqdm
 
 from vgs.assembly.episode import EpisodeRunner
 from vgs.assembly.record import EpisodeRecord
-from vgs.config import ExperimentConfig, PegConfig, to_dict
+from vgs.config import ExperimentConfig, PegConfig, same_config, to_dict
 from vgs.errors import ConfigError, VGSError
 from vgs.experiments.policies import EvalPolicy, is_run_dir, load_policy, policy_label
 
@@ -352,16 +352,22 @@ def summarize(df: pd.DataFrame) -> dict[str, Any]:
 
 def _prepare(cfg: ExperimentConfig, spec: EvalSpec, out: Path) -> dict[int, dict[str, Any]]:
     """Check and write ``out/meta.json``; return the rows already in the journal."""
-    load_policy(spec.policy, cfg)  # fail here, not in every worker, on a bad spec
+    policy = load_policy(spec.policy, cfg)  # fail here, not in every worker, on a bad spec
     out.mkdir(parents=True, exist_ok=True)
     meta = {"policy": policy_label(spec.policy), "policy_source": spec.policy,
+            "policy_trained_episodes": getattr(policy, "trained_episodes", None),
             "condition": spec.condition, "episodes": spec.episodes, "seed": spec.seed,
             "config": to_dict(cfg)}
     meta_path = out / "meta.json"
     if meta_path.exists():
         old = json.loads(meta_path.read_text())
-        keys = ("policy_source", "condition", "seed", "config")
+        # A training run that trained on since the rows were written is another policy.
+        keys = ["policy_source", "condition", "seed"]
+        if "policy_trained_episodes" in old:  # (not recorded before 2026-11-22)
+            keys.append("policy_trained_episodes")
         changed = [k for k in keys if json.dumps(old.get(k)) != json.dumps(meta[k])]
+        if not same_config(old.get("config"), cfg):
+            changed.append("config")
         if changed:
             raise ConfigError("out", f"{out} holds another evaluation (differs in {changed}); "
                                      "use a new folder")

@@ -35,8 +35,8 @@ from typing import Any
 
 import pandas as pd
 
-from vgs.config import ExperimentConfig, from_dict, to_dict
-from vgs.errors import ConfigError, VGSError
+from vgs.config import ExperimentConfig, same_config, to_dict
+from vgs.errors import ConfigError
 from vgs.experiments.evaluate import EvalSpec, evaluate_many, summarize
 from vgs.experiments.report import build_report
 from vgs.experiments.train import git_revision, train
@@ -57,18 +57,6 @@ def _train_job(args: tuple[ExperimentConfig, str, str, bool, int, int]) -> str:
     cfg, mode, out, progress, threads, position = args
     return str(train(cfg, mode, Path(out), progress=progress, threads=threads,
                      position=position))
-
-
-def same_config(saved: Any, cfg: ExperimentConfig) -> bool:
-    """Whether a saved configuration (``to_dict`` output) is ``cfg``. Fields added to vgs since
-    it was saved take their defaults, so a folder stays resumable across such additions."""
-    if not isinstance(saved, dict):
-        return False
-    try:
-        saved_cfg = from_dict(ExperimentConfig, saved)
-    except (TypeError, VGSError):
-        return False
-    return json.dumps(to_dict(saved_cfg)) == json.dumps(to_dict(cfg))
 
 
 class Reproduction:
@@ -151,9 +139,18 @@ class Reproduction:
         return len(pd.read_csv(table)) >= self.cfg.train.episodes
 
     def evaluate(self) -> None:
-        """Stage 2: every policy on every condition."""
+        """Stage 2: every policy on every condition.
+
+        Raises:
+            ConfigError: ``stages`` if a training run has not finished (its greedy policy would
+                be evaluated half-trained, and the rows kept on resume).
+        """
         t0 = time.perf_counter()
         r = self.cfg.reproduce
+        unfinished = [folder.name for _, _, folder in self.run_dirs() if not self._trained(folder)]
+        if unfinished:
+            raise ConfigError("stages", f"training has not finished in {', '.join(unfinished)}; "
+                                        "run the train stage first")
         policies: list[tuple[str, str, Path]] = []  # (label, spec, folder)
         for mode, seed, folder in self.run_dirs():
             policies.append((mode, str(folder), self.out / "eval" / mode / f"s{seed}"))
