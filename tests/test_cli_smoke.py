@@ -152,3 +152,18 @@ def test_reproduce_quick_at_reduced_size(tmp_path: Path) -> None:
     assert again.returncode == 0, again.stderr
     walls = json.loads((out / "reproduce.json").read_text())["stage_wall_s"]
     assert set(walls) >= {"train", "evaluate", "sweep", "report"}
+
+
+@pytest.mark.slow
+def test_reproduce_runs_only_the_stages_asked_for(tmp_path: Path) -> None:
+    """``--stages sweep`` runs the sweep and writes no report; unknown stages are refused."""
+    out = tmp_path / "rep"
+    proc = vgs("reproduce", "--profile", "smoke", "--out", str(out), "--workers", "1",
+               "--no-progress", "--stages", "sweep", "--set", "reproduce.sweep_offsets=1",
+               "--set", "reproduce.sweep_trials=1", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert (out / "sweep" / "summary.json").exists()
+    assert not (out / "report.md").exists()
+    bad = vgs("reproduce", "--profile", "smoke", "--out", str(tmp_path / "other"),
+              "--stages", "train,deploy", cwd=tmp_path)
+    assert bad.returncode == 2 and "stages" in bad.stderr

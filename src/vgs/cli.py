@@ -264,16 +264,19 @@ def cmd_reproduce(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
 
     rep = Reproduction(cfg, Path(args.out), workers=args.workers, backend=args.backend,
                        ray_address=args.ray_address, progress=not args.no_progress)
-    stages = {"train": rep.train, "evaluate": rep.evaluate, "sweep": rep.sweep}
-    for name in args.stages.split(","):
-        if name == "report":
-            continue
-        if name not in stages:
-            raise ConfigError("stages", f"unknown stage {name!r}; choose from train, evaluate, "
-                                        "sweep, report")
-        stages[name]()
-    path = rep.report()
-    print(f"wrote {path} and {path.with_suffix('.html')}")
+    stages = {"train": rep.train, "evaluate": rep.evaluate, "sweep": rep.sweep,
+              "report": rep.report}
+    names = [name.strip() for name in args.stages.split(",") if name.strip()]
+    unknown = [name for name in names if name not in stages]
+    if unknown or not names:
+        raise ConfigError("stages", f"unknown stage {unknown[0] if unknown else ''!r}; choose "
+                                    "from train, evaluate, sweep, report")
+    for name in stages:  # always in pipeline order
+        if name in names:
+            stages[name]()
+    if "report" in names:
+        path = rep.out / "report.md"
+        print(f"wrote {path} and {path.with_suffix('.html')}")
     return 0
 
 
@@ -281,7 +284,7 @@ def cmd_report(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     """Build DIR/report.md and DIR/report.html from the results in DIR."""
     from vgs.experiments.report import build_report
 
-    path = build_report(Path(args.dir))
+    path = build_report(Path(args.dir), **({"title": args.title} if args.title else {}))
     print(f"wrote {path} and {path.with_suffix('.html')}")
     if args.publish:
         from vgs.experiments.report import publish
@@ -416,8 +419,8 @@ def build_parser() -> argparse.ArgumentParser:
                            help="the paper's experiments: train, evaluate, sweep, report")
     repro.add_argument("--out", required=True, help="output folder (started again: resumes)")
     repro.add_argument("--stages", default="train,evaluate,sweep,report",
-                       help="comma-separated stages to run (default: %(default)s; the report "
-                            "is always written)")
+                       help="comma-separated stages to run, in pipeline order whatever the "
+                            "order given (default: %(default)s)")
     _parallel_flags(repro)
     repro.set_defaults(func=cmd_reproduce)
 
@@ -427,6 +430,7 @@ def build_parser() -> argparse.ArgumentParser:
     report.add_argument("--publish", metavar="DEST",
                         help="also copy the small result files (report, figures, tables; no "
                              "checkpoints) to DEST, e.g. docs/results/quick")
+    report.add_argument("--title", help="the report's title (default: VGS reproduction report)")
     report.set_defaults(func=cmd_report)
     return parser
 
