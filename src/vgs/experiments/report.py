@@ -398,7 +398,6 @@ def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
           "not the absolute seconds. Failed episodes count in the success rate only. Gain = "
           "(T_base - T_VGS) / T_base on mean times, 95 % paired-bootstrap interval.")
 
-    doc.h(2, "Headline")
     head_rows = []
     for condition in [c for c in CONDITIONS if c in set(table["condition"])]:
         part = table[table["condition"] == condition].set_index("policy")
@@ -412,6 +411,7 @@ def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
                           f"{g['success_rate']:.1%}",
                           gain.text(), f"{PAPER[condition]['gain']:+.2f} %"])
     if head_rows:
+        doc.h(2, "Headline")
         doc.table(["condition", "tests per policy", "baseline mean [s]", "VGS mean [s]",
                    "success base / VGS", "gain (ours, 95 % CI)", "gain (paper)"], head_rows)
     verdicts = []
