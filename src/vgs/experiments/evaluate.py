@@ -144,11 +144,10 @@ class EpisodeWorker:
             if is_run_dir(spec):
                 import torch
 
-                torch.set_num_threads(1)
                 if self.cfg.train.device != "cpu" and torch.cuda.is_available():
                     device = "cuda"
             self.policies[spec] = load_policy(spec, self.cfg, device)
-            torch_module = sys.modules.get("torch")
+            torch_module = sys.modules.get("torch")  # loaded by the policy, if it needs it
             if torch_module is not None:
                 torch_module.set_num_threads(1)
         return self.policies[spec]
