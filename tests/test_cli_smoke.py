@@ -147,6 +147,13 @@ def test_reproduce_quick_at_reduced_size(tmp_path: Path) -> None:
     text = (out / "report.md").read_text()
     assert "## Headline" in text and "+13.83 %" in text and "Q heat maps" in text
     assert (out / "report.html").stat().st_size > 50_000
+    # unattended (--no-progress): a log line per training checkpoint and per 5 % of evaluation
+    assert "train vgs" in proc.stderr and "checkpoint at episode 2/2" in proc.stderr
+    assert "eval 6 jobs: 6/6 episodes" in proc.stderr
+    status = vgs("status", str(out), cwd=tmp_path)
+    assert status.returncode == 0, status.stderr
+    for line in ("train (2/2 done)", "evaluate (6/6 done)", "sweep (1/1 done)", "report: "):
+        assert line in status.stdout, status.stdout
     # started again, every stage is already done: nothing is trained or evaluated again
     again = vgs(*args, cwd=tmp_path)
     assert again.returncode == 0, again.stderr

@@ -1,8 +1,9 @@
 """The ``vgs`` command: ``demo``, ``sweep``, ``export-scene``, ``model-info``, ``train``,
-``heatmap``, ``curves``, ``evaluate``, ``reproduce`` and ``report``.
+``heatmap``, ``curves``, ``evaluate``, ``reproduce``, ``report`` and ``status``.
 
-Every command takes ``--profile`` and configuration overrides (``--peg-mass`` ... and the generic
-``--set key=value`` with a dotted path into :class:`vgs.config.ExperimentConfig`). Bad input,
+Every command but ``status`` takes ``--profile`` and configuration overrides (``--peg-mass``
+... and the generic ``--set key=value`` with a dotted path into
+:class:`vgs.config.ExperimentConfig`). Bad input,
 whether argparse rejects it or a :class:`vgs.errors.VGSError` is raised, ends with one line
 ``vgs: error: <field>: <message>`` on stderr and exit code 2.
 """
@@ -294,6 +295,14 @@ def cmd_report(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     return 0
 
 
+def cmd_status(args: argparse.Namespace, cfg: ExperimentConfig | None) -> int:
+    """Print the progress of the jobs in a reproduce, train or evaluate folder."""
+    from vgs.experiments.status import format_status
+
+    print(format_status(Path(args.dir)))
+    return 0
+
+
 # -- parser -------------------------------------------------------------------------------------
 
 
@@ -432,6 +441,11 @@ def build_parser() -> argparse.ArgumentParser:
                              "checkpoints) to DEST, e.g. docs/results/quick")
     report.add_argument("--title", help="the report's title (default: VGS reproduction report)")
     report.set_defaults(func=cmd_report)
+
+    status = sub.add_parser("status", help="how far a reproduction, training run or evaluation "
+                                           "folder has got (safe while it runs)")
+    status.add_argument("dir", help="a reproduce, train or evaluate output folder")
+    status.set_defaults(func=cmd_status)
     return parser
 
 
@@ -453,7 +467,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     try:
         args = build_parser().parse_args(argv)
-        cfg = config_from_args(args)
+        cfg = config_from_args(args) if hasattr(args, "profile") else None
         return args.func(args, cfg)
     except VGSError as exc:
         message = " ".join(str(exc).split())

@@ -418,6 +418,7 @@ def evaluate_many(cfg: ExperimentConfig, jobs: list[tuple[EvalSpec, Path]],
     total = sum(spec.episodes for spec, _ in jobs)
     desc = (f"eval {policy_label(jobs[0][0].policy)}/{jobs[0][0].condition}" if len(jobs) == 1
             else f"eval {len(jobs)} jobs")
+    log_every = max(1, total // 20)  # with progress off: a line per 5 % for unattended logs
     bar = tqdm(total=total, initial=total - len(tasks), unit="episode", desc=desc,
                disable=not progress, dynamic_ncols=True)
     with bar:
@@ -436,6 +437,10 @@ def evaluate_many(cfg: ExperimentConfig, jobs: list[tuple[EvalSpec, Path]],
                     bar.update(1)
                     finished, ok = finished + 1, ok + int(bool(row["success"]))
                     bar.set_postfix(success=f"{ok / finished:.2f}")
+                    if not progress and (finished % log_every == 0 or finished == len(tasks)):
+                        print(f"{desc}: {total - len(tasks) + finished}/{total} episodes, "
+                              f"assembled {ok}/{finished} this run", file=sys.stderr,
+                              flush=True)
             finally:
                 for fh in journals:
                     fh.close()

@@ -38,10 +38,9 @@ import pandas as pd
 from vgs.config import ExperimentConfig, same_config, to_dict
 from vgs.errors import ConfigError
 from vgs.experiments.evaluate import EvalSpec, evaluate_many, summarize
+from vgs.experiments.layout import eval_jobs, train_runs
 from vgs.experiments.report import build_report
 from vgs.experiments.train import git_revision, train
-
-MODES = ("baseline", "vgs")
 
 
 def machine() -> str:
@@ -110,8 +109,7 @@ class Reproduction:
 
     def run_dirs(self) -> list[tuple[str, int, Path]]:
         """(mode, seed, folder) of every training run."""
-        return [(mode, seed, self.out / "train" / f"{mode}_s{seed}")
-                for seed in self.cfg.reproduce.train_seeds for mode in MODES]
+        return [(run.mode, run.seed, run.folder) for run in train_runs(self.cfg, self.out)]
 
     def train(self) -> None:
         """Stage 1: train (or resume) every run; runs go side by side over the workers."""
@@ -151,18 +149,13 @@ class Reproduction:
         if unfinished:
             raise ConfigError("stages", f"training has not finished in {', '.join(unfinished)}; "
                                         "run the train stage first")
-        policies: list[tuple[str, str, Path]] = []  # (label, spec, folder)
-        for mode, seed, folder in self.run_dirs():
-            policies.append((mode, str(folder), self.out / "eval" / mode / f"s{seed}"))
-        for ref in r.reference_policies:
-            policies.append((ref, ref, self.out / "eval" / ref / "s0"))
-        jobs = [(EvalSpec(spec, condition, self.cfg.eval.episodes, r.eval_seed),
-                 folder / condition)
-                for condition in r.conditions for _, spec, folder in policies]
+        layout = eval_jobs(self.cfg, self.out)
+        jobs = [(EvalSpec(job.policy, job.condition, self.cfg.eval.episodes, r.eval_seed),
+                 job.folder) for job in layout]
         evaluate_many(self.cfg, jobs, workers=self.workers, backend=self.backend,
                       ray_address=self.ray_address, progress=self.progress)
         for condition in r.conditions:
-            for label in dict.fromkeys(label for label, _, _ in policies):
+            for label in dict.fromkeys(job.label for job in layout):
                 self._merge(label, condition)
         self._stage("evaluate", t0)
 

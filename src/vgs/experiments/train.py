@@ -203,6 +203,7 @@ def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
                desc=f"train {mode}", disable=not progress, dynamic_ncols=True,
                 position=position)
     recent: list[tuple[bool, float]] = []
+    recent_walls: list[float] = []
     # Parallel episodes (train.parallel_episodes = K > 1): the grasps of K consecutive episodes
     # are chosen with the same network, their physics runs in K worker processes, and the
     # updates follow in episode order.
@@ -302,6 +303,7 @@ def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
 
             recent = (recent + [(record.grasp_success, record.assembly_time
                                  if record.success else math.nan)])[-50:]
+            recent_walls = (recent_walls + [wall])[-50:]
             times = [t for _, t in recent if math.isfinite(t)]
             bar.set_postfix(grasp=f"{np.mean([g for g, _ in recent]):.2f}",
                             T=f"{np.mean(times):.1f}" if times else "-",
@@ -312,6 +314,13 @@ def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
             if state.episode % cfg.train.checkpoint_every == 0 or state.episode == total:
                 state.rng_state = rng.bit_generator.state
                 save_checkpoint(ckpt, agent, replay, state, monitor)
+                if not progress:  # a line per checkpoint for logs of unattended runs
+                    print(f"train {mode} {out}: checkpoint at episode {state.episode}/{total}; "
+                          f"last {len(recent)}: grasp "
+                          f"{np.mean([g for g, _ in recent]):.2f}, assembly time "
+                          f"{np.mean(times) if times else math.nan:.1f} s, "
+                          f"{np.mean(recent_walls):.1f} s wall per episode", file=sys.stderr,
+                          flush=True)
     finally:
         csv_file.close()
         writer.close()

@@ -1,0 +1,214 @@
+"""``vgs status DIR``: how far a reproduction, training run or evaluation has got.
+
+Reads only the files the runs write as they go (``episodes.csv`` of a training run, the
+``journal.jsonl`` of an evaluation, ``reproduce.json``), never a checkpoint, so it is instant and
+safe to call while the run is working. It cannot tell a running job from a stopped one; it says
+when each folder was last written.
+
+Rates are per process: a training run is one process; an evaluation's ``s/episode`` is the
+mean wall time of one episode in one worker, so N workers finish about N episodes in that time.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from vgs.config import ExperimentConfig, from_dict
+from vgs.errors import ConfigError
+from vgs.experiments.layout import eval_jobs, train_runs
+
+RATE_WINDOW = 50  # episodes behind a rate
+
+
+@dataclass(frozen=True)
+class Progress:
+    """Progress of one job (a training run or an evaluation).
+
+    Attributes:
+        name: The job, as a path relative to the folder asked about.
+        done: Episodes finished and written.
+        total: Episodes planned.
+        finished: Whether the job wrote its final files (``convergence.json``/``summary.json``).
+        seconds_per_episode: Mean wall time of the last :data:`RATE_WINDOW` episodes of one
+            process, or None before any.
+        last_written: Seconds since the job last wrote a file, or None if it has not started.
+        note: Anything else worth a line (checkpoint, exploration phase, success so far).
+    """
+
+    name: str
+    done: int
+    total: int
+    finished: bool
+    seconds_per_episode: float | None
+    last_written: float | None
+    note: str = ""
+
+    @property
+    def remaining_h(self) -> float | None:
+        """Hours left for one process at the recent rate (None without a rate)."""
+        if self.finished or self.seconds_per_episode is None:
+            return None
+        return max(self.total - self.done, 0) * self.seconds_per_episode / 3600.0
+
+    def line(self) -> str:
+        """Name, count, state and rate on one line; the note, if any, indented below."""
+        if self.finished:
+            state = "done"
+        elif self.last_written is None:
+            state = "not started"
+        else:
+            state = f"last written {_ago(self.last_written)} ago"
+        parts = [f"{self.name:<34} {self.done:>5}/{self.total:<5} {state}"]
+        if self.seconds_per_episode is not None and not self.finished:
+            parts.append(f"{self.seconds_per_episode:.1f} s/episode, "
+                         f"{self.remaining_h:.1f} h left at that rate")
+        text = "; ".join(parts)
+        return f"{text}\n    {self.note}" if self.note and not self.finished else (
+            f"{text}; {self.note}" if self.note else text)
+
+
+def _ago(seconds: float) -> str:
+    if seconds < 120:
+        return f"{seconds:.0f} s"
+    if seconds < 7200:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.1f} h"
+
+
+def _age(*paths: Path) -> float | None:
+    mtimes = [p.stat().st_mtime for p in paths if p.exists()]
+    return time.time() - max(mtimes) if mtimes else None
+
+
+def _mean(values: list[float]) -> float | None:
+    return sum(values) / len(values) if values else None
+
+
+def train_progress(folder: Path, name: str | None = None) -> Progress:
+    """Progress of a training run folder (``run.json``, ``episodes.csv``).
+
+    Raises:
+        ConfigError: If ``folder`` holds no ``run.json`` nor ``episodes.csv`` and does not exist.
+    """
+    name = name or folder.name
+    meta_path, table = folder / "run.json", folder / "episodes.csv"
+    if not meta_path.exists():
+        if folder.exists():
+            return Progress(name, 0, 0, False, None, None, "no run.json")
+        raise ConfigError("dir", f"{folder} does not exist")
+    cfg = from_dict(ExperimentConfig, json.loads(meta_path.read_text())["config"])
+    total = cfg.train.episodes
+    rows: list[dict[str, str]] = []
+    if table.exists():
+        with table.open(newline="") as fh:
+            rows = list(csv.DictReader(fh))
+    done = len(rows)
+    finished = (folder / "convergence.json").exists() and done >= total
+    walls = [float(r["wall_s"]) for r in rows[-RATE_WINDOW:] if r.get("wall_s")]
+    notes = []
+    if not finished and done:
+        every = cfg.train.checkpoint_every
+        notes.append(f"a restart resumes at episode {done - done % every}"
+                     if (folder / "checkpoint.pt").exists() else "no checkpoint yet")
+        if done < cfg.agent.random_episodes:
+            notes.append(f"random exploration until episode {cfg.agent.random_episodes} "
+                         "(the episodes after it also run the forward pass: slower)")
+    if rows:
+        window = rows[-RATE_WINDOW:]
+        grasp = sum(int(r["grasp_success"]) for r in window) / len(window)
+        ok = sum(int(r["assembly_success"]) for r in window) / len(window)
+        notes.append(f"last {len(window)}: grasp {grasp:.2f}, assembly {ok:.2f}")
+    last = _age(table, meta_path, folder / "checkpoint.pt") if rows else None
+    return Progress(name, done, total, finished, _mean(walls), last, "; ".join(notes))
+
+
+def eval_progress(folder: Path, name: str | None = None, total: int | None = None) -> Progress:
+    """Progress of an evaluation folder (``meta.json``, ``journal.jsonl``, ``summary.json``).
+
+    Args:
+        folder: The evaluation's output folder.
+        name: Name to show (default: the folder's name).
+        total: Planned episodes when the folder has no ``meta.json`` yet.
+    """
+    name = name or folder.name
+    meta_path, journal = folder / "meta.json", folder / "journal.jsonl"
+    if meta_path.exists():
+        total = int(json.loads(meta_path.read_text())["episodes"])
+    rows = []
+    if journal.exists():
+        for text in journal.read_text().splitlines():
+            try:
+                rows.append(json.loads(text))
+            except json.JSONDecodeError:  # a line cut short by a kill
+                continue
+    done = len({int(r["index"]) for r in rows})
+    summary = folder / "summary.json"
+    finished = summary.exists() and total is not None and done >= total
+    note = ""
+    if rows:
+        ok = sum(bool(r["success"]) for r in rows)
+        note = f"assembled {ok}/{len(rows)}"
+    walls = [float(r["wall_s"]) for r in rows[-RATE_WINDOW:] if r.get("wall_s") is not None]
+    last = _age(journal, meta_path) if (rows or meta_path.exists()) else None
+    return Progress(name, done, total or 0, finished, _mean(walls), last, note)
+
+
+def folder_status(path: Path) -> list[tuple[str, list[Progress]]]:
+    """Sections of progress lines for a reproduction, training run or evaluation folder.
+
+    Returns:
+        ``(section title, jobs)`` pairs: ``train``, ``evaluate`` and ``sweep`` for a
+        reproduction; one section for a single run.
+
+    Raises:
+        ConfigError: If ``path`` is not one of the three kinds of folder.
+    """
+    if not path.is_dir():
+        raise ConfigError("dir", f"{path} is not a folder")
+    if (path / "reproduce.json").exists():
+        meta = json.loads((path / "reproduce.json").read_text())
+        cfg = from_dict(ExperimentConfig, meta["config"])
+        train = [train_progress(run.folder, str(run.folder.relative_to(path)))
+                 for run in train_runs(cfg, path)]
+        evaluate = [eval_progress(job.folder, str(job.folder.relative_to(path)),
+                                  total=cfg.eval.episodes) for job in eval_jobs(cfg, path)]
+        sections = [("train", train), ("evaluate", evaluate)]
+        r = cfg.reproduce
+        if r.sweep_offsets:
+            sweep = path / "sweep"
+            total = r.sweep_offsets * r.sweep_trials
+            done = (path / "sweep" / "summary.json").exists()
+            sections.append(("sweep", [Progress("sweep", total if done else 0, total, done, None,
+                                                _age(sweep / "sweep.csv"))]))
+        return sections
+    if (path / "run.json").exists():
+        return [("train", [train_progress(path)])]
+    if (path / "meta.json").exists() or (path / "journal.jsonl").exists():
+        return [("evaluate", [eval_progress(path)])]
+    raise ConfigError("dir", f"{path} is not a reproduction (reproduce.json), training run "
+                             "(run.json) or evaluation (meta.json) folder")
+
+
+def format_status(path: Path) -> str:
+    """The text ``vgs status`` prints."""
+    lines = [f"{path}"]
+    if (path / "reproduce.json").exists():
+        meta = json.loads((path / "reproduce.json").read_text())
+        walls = ", ".join(f"{k} {v / 3600:.2f} h" for k, v in meta.get("stage_wall_s", {}).items())
+        lines[0] += (f": {meta.get('profile')} profile, commit "
+                     f"{str(meta.get('git_revision') or '?')[:7]}")
+        if walls:
+            lines.append(f"stage wall times so far: {walls}")
+    for title, jobs in folder_status(path):
+        done = sum(job.finished for job in jobs)
+        lines.append(f"{title} ({done}/{len(jobs)} done)")
+        lines += ["  " + job.line() for job in jobs]
+    if (path / "report.md").exists():
+        lines.append(f"report: {path / 'report.md'} ({_ago(_age(path / 'report.md') or 0)} old)")
+    elif (path / "reproduce.json").exists():
+        lines.append("report: not written yet")
+    return "\n".join(lines)

@@ -1,0 +1,118 @@
+"""``vgs status``: progress read from the files of half-finished runs (no physics, no torch)."""
+
+from __future__ import annotations
+
+import csv
+import json
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from vgs.config import profile, to_dict
+from vgs.errors import ConfigError
+from vgs.experiments.layout import eval_jobs, train_runs
+from vgs.experiments.status import eval_progress, folder_status, format_status, train_progress
+
+COLUMNS = ("episode", "mode", "grasp_success", "assembly_success", "assembly_time_s", "wall_s")
+
+
+def _config():
+    cfg = profile("smoke")
+    return replace(cfg, train=replace(cfg.train, episodes=10, checkpoint_every=4),
+                   agent=replace(cfg.agent, random_episodes=8),
+                   eval=replace(cfg.eval, episodes=5),
+                   reproduce=replace(cfg.reproduce, conditions=("nominal",), sweep_offsets=0))
+
+
+def _train_run(folder: Path, cfg, walls: list[float], converged: bool = False) -> None:
+    folder.mkdir(parents=True)
+    (folder / "run.json").write_text(json.dumps({"mode": "vgs", "config": to_dict(cfg)}))
+    with (folder / "episodes.csv").open("w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=COLUMNS)
+        writer.writeheader()
+        for i, wall in enumerate(walls):
+            writer.writerow({"episode": i, "mode": "vgs", "grasp_success": 1,
+                             "assembly_success": i % 2, "assembly_time_s": 20.0,
+                             "wall_s": wall})
+    (folder / "checkpoint.pt").write_bytes(b"")
+    if converged:
+        (folder / "convergence.json").write_text("{}")
+
+
+def test_training_run_half_way(tmp_path: Path) -> None:
+    cfg = _config()
+    _train_run(tmp_path / "run", cfg, [2.0] * 6)
+    p = train_progress(tmp_path / "run")
+    assert (p.done, p.total, p.finished) == (6, 10, False)
+    assert p.seconds_per_episode == pytest.approx(2.0)
+    assert p.remaining_h == pytest.approx(4 * 2.0 / 3600)
+    assert "resumes at episode 4" in p.note and "random exploration until episode 8" in p.note
+    assert "assembly 0.50" in p.note
+
+
+def test_finished_training_run(tmp_path: Path) -> None:
+    cfg = _config()
+    _train_run(tmp_path / "run", cfg, [1.0] * 10, converged=True)
+    p = train_progress(tmp_path / "run")
+    assert p.finished and p.remaining_h is None and "done" in p.line()
+
+
+def test_evaluation_with_a_torn_journal_line(tmp_path: Path) -> None:
+    out = tmp_path / "eval"
+    out.mkdir()
+    (out / "meta.json").write_text(json.dumps({"episodes": 5}))
+    rows = [{"index": i, "success": i != 1, "wall_s": 3.0} for i in range(3)]
+    (out / "journal.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows) + '{"ind')
+    p = eval_progress(out)
+    assert (p.done, p.total, p.finished) == (3, 5, False)
+    assert p.note == "assembled 2/3" and p.seconds_per_episode == pytest.approx(3.0)
+
+
+def test_reproduction_folder(tmp_path: Path) -> None:
+    cfg = _config()
+    out = tmp_path / "repro"
+    out.mkdir()
+    (out / "reproduce.json").write_text(json.dumps(
+        {"profile": "smoke", "config": to_dict(cfg), "git_revision": "abcdef0123",
+         "stage_wall_s": {"train": 7200.0}}))
+    runs = train_runs(cfg, out)
+    _train_run(runs[0].folder, cfg, [1.0] * 10, converged=True)
+    _train_run(runs[1].folder, cfg, [1.0] * 3)
+    done_job = eval_jobs(cfg, out)[-1]  # the centre heuristic
+    done_job.folder.mkdir(parents=True)
+    (done_job.folder / "meta.json").write_text(json.dumps({"episodes": 5}))
+    (done_job.folder / "journal.jsonl").write_text(
+        "".join(json.dumps({"index": i, "success": True, "wall_s": 1.0}) + "\n"
+                for i in range(5)))
+    (done_job.folder / "summary.json").write_text("{}")
+    sections = dict(folder_status(out))
+    assert [p.finished for p in sections["train"]] == [True, False]
+    assert [p.done for p in sections["evaluate"]] == [0, 0, 5]
+    assert [p.finished for p in sections["evaluate"]] == [False, False, True]
+    assert [p.total for p in sections["evaluate"]] == [5, 5, 5]
+    text = format_status(out)
+    assert "smoke profile, commit abcdef0" in text and "train 2.00 h" in text
+    assert "train (1/2 done)" in text and "evaluate (1/3 done)" in text
+    assert "not started" in text and "report: not written yet" in text
+
+
+def test_not_a_run_folder(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match="is not a reproduction"):
+        folder_status(tmp_path)
+    with pytest.raises(ConfigError, match="is not a folder"):
+        folder_status(tmp_path / "missing")
+
+
+def test_status_does_not_import_torch(tmp_path: Path) -> None:
+    """Instant while a run works: ``vgs status`` never loads torch or a checkpoint."""
+    import subprocess
+
+    (tmp_path / "meta.json").write_text(json.dumps({"episodes": 5}))
+    code = ("import sys; from vgs.cli import main; "
+            f"assert main(['status', {str(tmp_path)!r}]) == 0; "
+            "assert 'torch' not in sys.modules")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert "0/5" in proc.stdout
