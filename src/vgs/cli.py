@@ -309,8 +309,8 @@ def cmd_status(args: argparse.Namespace, cfg: ExperimentConfig | None) -> int:
 def _common() -> argparse.ArgumentParser:
     common = _Parser(add_help=False)
     common.add_argument("--profile", default="paper",
-                        help="configuration profile: smoke, quick or paper (default: paper; "
-                             "the cell is the same in all profiles)")
+                        help="configuration profile: smoke, quick, medium or paper "
+                             "(default: paper; the cell is the same in all profiles)")
     group = common.add_argument_group("configuration overrides (SI units)")
     group.add_argument("--peg-mass", type=float, help="peg mass [kg] (cell.peg.mass)")
     group.add_argument("--peg-length", type=float, help="peg length [m] (cell.peg.length)")
