@@ -5,7 +5,7 @@ otherwise (``*_mm``, ``*_deg``). Every dataclass validates itself in ``__post_in
 :class:`vgs.errors.ConfigError` naming the offending field, so bad input never reaches the physics.
 
 Named profiles (:data:`PROFILES`): ``smoke`` (seconds, for tests), ``quick`` (minutes on a 2-core
-CPU), ``medium`` (about two hours there) and ``paper`` (the paper's budget: 5000 training grasps,
+CPU), ``medium`` (1.5-2 hours there) and ``paper`` (the paper's budget: 5000 training grasps,
 1000 test assemblies).
 """
 
@@ -625,17 +625,17 @@ def _quick() -> ExperimentConfig:
 
 
 def _medium() -> ExperimentConfig:
-    # Sized to fit `vgs reproduce --profile medium` into one working session (about 2 h) on a
-    # 2-core CPU, 10x the quick profile's training and 17x its tests: 2 x 800 training episodes
-    # side by side (200 random), 3 policies x 3 conditions x 200 test episodes, no sweep (the
-    # sweep has its own command). The light backbone at the quick profile's R = 8 keeps the
-    # network's share of the time small; the simulation is the rest.
+    # Sized to fit `vgs reproduce --profile medium` into one working session (1.5-2 h) on a
+    # 2-core CPU, 15x the quick profile's training and 20x its tests: 2 x 1200 training episodes
+    # side by side (the first 240 random: the paper's 20 %), 3 policies x 3 conditions x 250
+    # test episodes, no sweep (the sweep has its own command). The light backbone at the quick
+    # profile's R = 8 keeps the network's share of the time small; the simulation is the rest.
     return ExperimentConfig(
         name="medium",
         network=NetworkConfig(backbone="light", num_rotations=8),
-        agent=AgentConfig(random_episodes=200, target_update_period=25, delta_q_window=50),
-        train=TrainConfig(episodes=800, checkpoint_every=25),
-        eval=EvalConfig(episodes=200),
+        agent=AgentConfig(random_episodes=240, target_update_period=25, delta_q_window=50),
+        train=TrainConfig(episodes=1200, checkpoint_every=25),
+        eval=EvalConfig(episodes=250),
         reproduce=ReproduceConfig(sweep_offsets=0),
     )
 
