@@ -70,6 +70,20 @@ def test_evaluation_with_a_torn_journal_line(tmp_path: Path) -> None:
     assert p.note == "assembled 2/3" and p.seconds_per_episode == pytest.approx(3.0)
 
 
+def test_evaluation_with_all_episodes_in_but_no_tables_yet(tmp_path: Path) -> None:
+    out = tmp_path / "eval"
+    out.mkdir()
+    (out / "meta.json").write_text(json.dumps({"episodes": 2}))
+    (out / "journal.jsonl").write_text(
+        "".join(json.dumps({"index": i, "success": True, "wall_s": 1.0}) + "\n" for i in (0, 1)))
+    p = eval_progress(out)
+    assert (p.done, p.finished) == (2, False)
+    assert "all episodes in, tables written when the evaluation ends" in p.note
+    (out / "summary.json").write_text("{}")
+    p = eval_progress(out)
+    assert p.finished and p.note == "assembled 2/2"
+
+
 def test_reproduction_folder(tmp_path: Path) -> None:
     cfg = _config()
     out = tmp_path / "repro"

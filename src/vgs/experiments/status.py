@@ -152,6 +152,8 @@ def eval_progress(folder: Path, name: str | None = None, total: int | None = Non
     if rows:
         ok = sum(bool(r["success"]) for r in rows)
         note = f"assembled {ok}/{len(rows)}"
+        if not finished and total is not None and done >= total:
+            note += "; all episodes in, tables written when the evaluation ends"
     walls = [float(r["wall_s"]) for r in rows[-RATE_WINDOW:] if r.get("wall_s") is not None]
     last = _age(journal, meta_path) if (rows or meta_path.exists()) else None
     return Progress(name, done, total or 0, finished, _mean(walls), last, note)
