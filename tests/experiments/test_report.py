@@ -54,6 +54,19 @@ def test_failures_are_left_out_of_the_times() -> None:
     assert gain.value == pytest.approx(50.0)
 
 
+def test_time_per_assembled_peg_counts_failed_attempts() -> None:
+    from vgs.experiments.evaluate import summarize
+
+    df = _table("vgs", np.array([40.0, 60.0, 0.0, 0.0]),
+                success=np.array([True, True, False, False]))
+    df.loc[2, "assembly_time"] = 100.0  # an attempt given up after 100 s
+    df.loc[3, "grasp_success"] = False  # a missed grasp: no assembly time
+    s = summarize(df)
+    assert s["time_mean_s"] == pytest.approx(50.0)  # successful assemblies only
+    assert s["time_per_assembled_s"] == pytest.approx((40.0 + 60.0 + 100.0) / 2)
+    assert summarize(df.assign(success=False))["time_per_assembled_s"] is None
+
+
 def test_report_says_when_vgs_is_slower(tmp_path: Path) -> None:
     rng = np.random.default_rng(2)
     base = rng.uniform(100, 160, 200)
