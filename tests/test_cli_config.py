@@ -56,6 +56,21 @@ def test_parse_value() -> None:
     assert parse_value("light") == "light"
 
 
+def test_tuple_fields_take_unquoted_items() -> None:
+    from vgs.cli import apply_override
+    from vgs.config import profile
+
+    cfg = profile("smoke")
+    assert apply_override(cfg, "reproduce.conditions", "(nominal,)").reproduce.conditions == (
+        "nominal",)
+    assert apply_override(cfg, "reproduce.conditions",
+                          parse_value("nominal,mass")).reproduce.conditions == ("nominal", "mass")
+    assert apply_override(cfg, "reproduce.train_seeds",
+                          parse_value("(0, 1)")).reproduce.train_seeds == (0, 1)
+    assert apply_override(cfg, "reproduce.reference_policies",
+                          parse_value("()")).reproduce.reference_policies == ()
+
+
 def test_main_reports_one_line(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["demo", "--peg-mass", "-1"]) == 2
     err = capsys.readouterr().err

@@ -56,8 +56,22 @@ def parse_value(text: str) -> Any:
         return text
 
 
+def _current(cfg: Any, path: str) -> Any:
+    """The value at the dotted ``path`` of ``cfg``, or None if there is none."""
+    for name in path.split("."):
+        cfg = getattr(cfg, name, None)
+    return cfg
+
+
 def apply_override(cfg: ExperimentConfig, path: str, value: Any) -> ExperimentConfig:
-    """``override(cfg, path, value)`` with every bad value reported as a ConfigError."""
+    """``override(cfg, path, value)`` with every bad value reported as a ConfigError.
+
+    A tuple field given text that is not a Python literal takes its comma-separated items, so
+    ``reproduce.conditions=nominal,mass`` and ``reproduce.conditions=(nominal,)`` both work.
+    """
+    if isinstance(value, str) and isinstance(_current(cfg, path), tuple):
+        items = value.strip().strip("()[]").split(",")
+        value = tuple(parse_value(item.strip()) for item in items if item.strip())
     try:
         return override(cfg, path, value)
     except ConfigError:
