@@ -86,6 +86,7 @@ def test_model_info(tmp_path: Path) -> None:
         (("export-scene", "--set", "cell.hole.segments=4"), "hole.segments"),
         (("export-scene", "--peg-mass", "abc"), "argument --peg-mass"),
         (("frobnicate",), "argument COMMAND"),
+        (("seeds", "nowhere", "--out", "x"), "seeds"),
     ],
 )
 def test_bad_input_one_line_exit_2(tmp_path: Path, argv: tuple[str, ...], field: str) -> None:
@@ -126,6 +127,15 @@ def test_evaluate_and_report(tmp_path: Path) -> None:
     assert not list((tmp_path / "pub").rglob("*.pt"))
     empty = vgs("report", str(tmp_path / "nothing"), cwd=tmp_path)
     assert empty.returncode == 2 and "no evaluation results" in empty.stderr
+
+
+def test_seeds(tmp_path: Path) -> None:
+    data = Path(__file__).parent / "data" / "report_small"
+    proc = vgs("seeds", str(data), "--out", str(tmp_path / "seeds"), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "| s0 |" in proc.stdout and "| **mean** |" in proc.stdout
+    for name in ("seeds.md", "seeds.csv", "seeds.png"):
+        assert (tmp_path / "seeds" / name).exists()
 
 
 @pytest.mark.slow

@@ -309,6 +309,16 @@ def cmd_report(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     return 0
 
 
+def cmd_seeds(args: argparse.Namespace, cfg: ExperimentConfig | None) -> int:
+    """Compare VGS with the baseline across the training runs of several results folders."""
+    from vgs.experiments.seeds import seeds_report
+
+    path = seeds_report([Path(d) for d in args.dirs], Path(args.out))
+    print(path.read_text().split("![", 1)[0].rstrip())
+    print(f"\nwrote {path}, {path.with_suffix('.csv')} and {path.with_suffix('.png')}")
+    return 0
+
+
 def cmd_status(args: argparse.Namespace, cfg: ExperimentConfig | None) -> int:
     """Print the progress of the jobs in a reproduce, train or evaluate folder."""
     from vgs.experiments.status import format_status
@@ -455,6 +465,15 @@ def build_parser() -> argparse.ArgumentParser:
                              "checkpoints) to DEST, e.g. docs/results/quick")
     report.add_argument("--title", help="the report's title (default: VGS reproduction report)")
     report.set_defaults(func=cmd_report)
+
+    seeds = sub.add_parser("seeds", help="VGS against the baseline per training seed and on "
+                                         "average, from several results folders")
+    seeds.add_argument("dirs", nargs="+", metavar="DIR",
+                       help="reproduce folders or their published copies (docs/results/...), "
+                            "each with eval/<policy>/<condition>/episodes.parquet")
+    seeds.add_argument("--out", required=True,
+                       help="folder of seeds.md, seeds.csv and seeds.png")
+    seeds.set_defaults(func=cmd_seeds)
 
     status = sub.add_parser("status", help="how far a reproduction, training run or evaluation "
                                            "folder has got (safe while it runs)")

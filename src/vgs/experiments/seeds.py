@@ -1,0 +1,299 @@
+"""Across training seeds: the efficiency gain of each trained pair and their mean.
+
+One training seed gives one baseline and one VGS network; the gain measured on its test
+episodes carries the test-episode noise (the paired bootstrap of :mod:`vgs.experiments.report`)
+but not the spread between training runs, which can be larger (one seed's baseline may learn to
+grasp, another's not). ``vgs seeds DIR [DIR ...] --out DEST`` gathers the evaluation tables of
+several reproduce folders (or their published copies under ``docs/results``) and writes:
+
+* ``DEST/seeds.csv``: one row per (condition, training run) and one ``mean`` row per condition;
+* ``DEST/seeds.md``: the same as tables, with the commands' folders;
+* ``DEST/seeds.png``: the gains with their intervals, per condition, the paper's gain beside.
+
+Statistics. For training run ``s`` the gain is ``g_s = 100 (T_base,s - T_vgs,s) / T_base,s`` on
+the mean times of successful assemblies, with the paired bootstrap interval over its test
+episodes. The across-seed estimate is the plain mean ``g = (1/S) sum_s g_s`` (each training run
+weighs the same, whatever its number of successes). Its 95 % interval comes from a two-level
+bootstrap: draw ``S`` training runs with replacement, then, within each drawn run, its test
+episodes with replacement (paired: both policies keep the same scenes), and average the
+resampled gains; percentile interval over 2000 resamples. With two or three seeds the outer
+level has few distinct draws, so the interval is coarse; the table also gives the spread
+between seeds (sample standard deviation of ``g_s``).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+
+from vgs.errors import ConfigError  # noqa: E402
+from vgs.experiments.evaluate import CONDITIONS, summarize  # noqa: E402
+from vgs.experiments.report import (  # noqa: E402
+    BOOTSTRAP_RESAMPLES,
+    CONDITION_TITLES,
+    MIN_SUCCESSES,
+    PAPER,
+    efficiency_gain,
+    load_results,
+)
+
+LEARNED = ("baseline", "vgs")
+
+
+def load_seeds(folders: list[Path]) -> pd.DataFrame:
+    """Baseline and VGS test episodes of every training run in ``folders``.
+
+    Adds the column ``source`` (the folder). Reference policies (centre, random) are left out:
+    they do not depend on a training seed.
+
+    Raises:
+        ConfigError: If a folder has no results, holds no baseline or VGS table, two folders hold
+            the same training run, or the folders' test scenes differ (another evaluation root
+            seed or number of episodes), so the gains would not be comparable.
+    """
+    if not folders:
+        raise ConfigError("seeds", "give at least one results folder")
+    frames = []
+    owner: dict[str, Path] = {}
+    for folder in folders:
+        try:
+            df = load_results(folder)
+        except ConfigError as exc:
+            raise ConfigError("seeds", exc.message) from exc
+        df = df[df["policy"].isin(LEARNED)].copy()
+        if df.empty:
+            raise ConfigError("seeds", f"{folder} holds no baseline or VGS evaluation")
+        if "train_run" not in df:
+            df["train_run"] = "s?"
+        for run in sorted(set(df["train_run"])):
+            if run in owner:
+                raise ConfigError("seeds", f"training run {run} is in both {owner[run]} and "
+                                           f"{folder}; give each training seed once")
+            owner[run] = folder
+        frames.append(df.assign(source=str(folder)))
+    df = pd.concat(frames, ignore_index=True)
+    for condition, part in df.groupby("condition"):
+        scenes = {(run, str(p["root_seed"].iloc[0]), len(p))
+                  for run, p in part.groupby(["train_run", "policy"])}
+        roots = {s[1] for s in scenes}
+        sizes = {s[2] for s in scenes}
+        if len(roots) > 1 or len(sizes) > 1:
+            raise ConfigError("seeds", f"{condition}: the folders were evaluated on different "
+                                       f"test scenes (root seeds {sorted(roots)}, episodes "
+                                       f"{sorted(sizes)}); evaluate them with the same "
+                                       "reproduce.eval_seed and eval.episodes")
+    return df
+
+
+def _times(df: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
+    df = df.sort_values("index")
+    return df["assembly_time"].to_numpy(float), df["success"].to_numpy(bool)
+
+
+def _gain(tb: np.ndarray, ob: np.ndarray, tv: np.ndarray, ov: np.ndarray) -> float:
+    if not ob.any() or not ov.any():
+        return math.nan
+    mb, mv = tb[ob].mean(), tv[ov].mean()
+    return 100.0 * (mb - mv) / mb
+
+
+def mean_gain(pairs: list[tuple[pd.DataFrame, pd.DataFrame]],
+              resamples: int = BOOTSTRAP_RESAMPLES, seed: int = 0) -> tuple[float, float, float]:
+    """Mean over training runs of the gain, with the two-level bootstrap 95 % interval.
+
+    Args:
+        pairs: ``(baseline table, VGS table)`` of each training run, on the same test scenes.
+        resamples: Bootstrap resamples.
+        seed: Seed of the resampling.
+
+    Returns:
+        ``(mean gain, low, high)`` in percent; the interval is NaN when a run has fewer than
+        :data:`vgs.experiments.report.MIN_SUCCESSES` successes for either policy.
+    """
+    arrays = [(*_times(b), *_times(v)) for b, v in pairs]
+    gains = [_gain(*a) for a in arrays]
+    value = float(np.mean(gains)) if gains else math.nan
+    if (not math.isfinite(value)
+            or min(min(a[1].sum(), a[3].sum()) for a in arrays) < MIN_SUCCESSES):
+        return value, math.nan, math.nan
+    rng = np.random.default_rng(seed)
+    out = np.empty(resamples)
+    for b in range(resamples):
+        total = 0.0
+        for s in rng.integers(len(arrays), size=len(arrays)):
+            tb, ob, tv, ov = arrays[s]
+            i = rng.integers(len(tb), size=len(tb))
+            total += _gain(tb[i], ob[i], tv[i], ov[i])
+        out[b] = total / len(arrays)
+    out = out[np.isfinite(out)]
+    if not out.size:
+        return value, math.nan, math.nan
+    low, high = np.percentile(out, [2.5, 97.5])
+    return value, float(low), float(high)
+
+
+def seeds_table(df: pd.DataFrame) -> pd.DataFrame:
+    """One row per (condition, training run) and a ``mean`` row per condition."""
+    rows: list[dict[str, Any]] = []
+    for condition in [c for c in CONDITIONS if c in set(df["condition"])]:
+        part = df[df["condition"] == condition]
+        pairs = []
+        for run in sorted(set(part["train_run"])):
+            mine = part[part["train_run"] == run]
+            base, vgs = (mine[mine["policy"] == p] for p in LEARNED)
+            if base.empty or vgs.empty:
+                continue  # only one of the two policies evaluated: no gain
+            pairs.append((base, vgs))
+            sb, sv = summarize(base), summarize(vgs)
+            gain = efficiency_gain(base, vgs)
+            rows.append({
+                "condition": condition, "train_run": run, "source": mine["source"].iloc[0],
+                "episodes": sb["episodes"],
+                "successes_baseline": sb["successes"], "successes_vgs": sv["successes"],
+                "grasp_success_baseline": sb["grasp_success_rate"],
+                "grasp_success_vgs": sv["grasp_success_rate"],
+                "offset_mm_baseline": sb["abs_grasp_offset_mean_mm"],
+                "offset_mm_vgs": sv["abs_grasp_offset_mean_mm"],
+                "time_mean_s_baseline": sb["time_mean_s"], "time_mean_s_vgs": sv["time_mean_s"],
+                "time_per_assembled_s_baseline": sb["time_per_assembled_s"],
+                "time_per_assembled_s_vgs": sv["time_per_assembled_s"],
+                "gain_pct": gain.value, "gain_ci_low": gain.low, "gain_ci_high": gain.high,
+            })
+        if not pairs:
+            continue
+        mine_rows = [r for r in rows if r["condition"] == condition]
+        value, low, high = mean_gain(pairs)
+        gains = np.array([r["gain_pct"] for r in mine_rows], float)
+        mean_row: dict[str, Any] = {"condition": condition, "train_run": "mean", "source": "",
+                                    "episodes": int(sum(r["episodes"] for r in mine_rows))}
+        for key in mine_rows[0]:
+            if key.endswith(("_baseline", "_vgs")):
+                values = [r[key] for r in mine_rows if r[key] is not None]
+                mean_row[key] = (int(sum(values)) if key.startswith("successes")
+                                 else float(np.mean(values)) if values else None)
+        mean_row.update(gain_pct=value, gain_ci_low=low, gain_ci_high=high,
+                        gain_sd_between_seeds=float(np.std(gains, ddof=1))
+                        if gains.size > 1 else math.nan,
+                        seeds_with_positive_gain=int(np.sum(gains > 0)), seeds=len(mine_rows))
+        rows.append(mean_row)
+    if not rows:
+        raise ConfigError("seeds", "no condition has both a baseline and a VGS evaluation")
+    return pd.DataFrame(rows)
+
+
+def plot_seeds(table: pd.DataFrame, path: Path) -> Path:
+    """Forest plot: each training run's gain and the mean, per condition; the paper's gain."""
+    conditions = list(dict.fromkeys(table["condition"]))
+    runs = sorted(set(table["train_run"]) - {"mean"}) + ["mean"]
+    y_of = {run: float(len(runs) - 1 - i) for i, run in enumerate(runs)}
+    fig, axes = plt.subplots(1, len(conditions), figsize=(4.2 * len(conditions), 1.4 + 0.5 *
+                             len(runs)), sharex=True, sharey=True, squeeze=False)
+    for ax, condition in zip(axes[0], conditions, strict=True):
+        part = table[table["condition"] == condition]
+        for _, row in part.iterrows():
+            mean = row["train_run"] == "mean"
+            color, yi = ("black" if mean else "tab:red"), y_of[row["train_run"]]
+            if math.isfinite(row["gain_ci_low"]):
+                ax.plot([row["gain_ci_low"], row["gain_ci_high"]], [yi, yi], color=color,
+                        lw=2.5 if mean else 1.5)
+            ax.plot(row["gain_pct"], yi, "D" if mean else "o", color=color, ms=7 if mean else 5)
+        ax.axvline(0.0, color="gray", lw=0.8)
+        paper = PAPER.get(condition, {}).get("gain")
+        if paper is not None:
+            ax.axvline(paper, color="tab:blue", ls="--", lw=1.2)
+            ax.text(paper, len(runs) - 0.45, f" paper {paper:+.2f} %", color="tab:blue",
+                    fontsize=8, va="center")
+        ax.set_ylim(-0.6, len(runs) - 0.2)
+        ax.set_title(CONDITION_TITLES.get(condition, condition), fontsize=9)
+        ax.set_xlabel("efficiency gain of VGS [%] (95 % CI)")
+    axes[0][0].set_yticks(list(y_of.values()), runs)
+    axes[0][0].set_ylabel("training run")
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def _fmt(value: Any, digits: int = 1, suffix: str = "") -> str:
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "n/a"
+    return f"{value:.{digits}f}{suffix}"
+
+
+def _gain_text(row: pd.Series) -> str:
+    if not math.isfinite(row["gain_pct"]):
+        return "n/a"
+    if not math.isfinite(row["gain_ci_low"]):
+        return f"{row['gain_pct']:+.1f} %"
+    return f"{row['gain_pct']:+.1f} % [{row['gain_ci_low']:+.1f}, {row['gain_ci_high']:+.1f}]"
+
+
+def seeds_markdown(table: pd.DataFrame, folders: list[Path], figure: str) -> str:
+    """The tables of :func:`seeds_table` as Markdown."""
+    lines = ["# VGS against the baseline, across training seeds", "",
+             "Written by `vgs seeds " + " ".join(str(f) for f in folders) + " --out ...` "
+             "(module `vgs.experiments.seeds`). Each training run trains one baseline and one "
+             "VGS network; both meet the same test scenes. Gain: (T_baseline - T_VGS) / "
+             "T_baseline on the mean time of successful assemblies, 95 % interval from the "
+             "paired bootstrap over test episodes; the mean row averages the runs' gains, its "
+             "interval from the two-level bootstrap (runs, then episodes).", ""]
+    for condition in dict.fromkeys(table["condition"]):
+        part = table[table["condition"] == condition]
+        paper = PAPER.get(condition, {}).get("gain")
+        lines += [f"## {CONDITION_TITLES.get(condition, condition)}", ""]
+        lines += ["| training run | assembled, baseline / VGS | grasp success | "
+                  "mean grasp offset [mm] | mean time of successes [s] | "
+                  "time per assembled peg [s] | gain |",
+                  "|---|---|---|---|---|---|---|"]
+        for _, r in part.iterrows():
+            run = "**mean**" if r["train_run"] == "mean" else str(r["train_run"])
+            lines.append(
+                f"| {run} | {r['successes_baseline']} / {r['successes_vgs']} of "
+                f"{r['episodes']} | {_fmt(r['grasp_success_baseline'], 2)} / "
+                f"{_fmt(r['grasp_success_vgs'], 2)} | {_fmt(r['offset_mm_baseline'])} / "
+                f"{_fmt(r['offset_mm_vgs'])} | {_fmt(r['time_mean_s_baseline'])} / "
+                f"{_fmt(r['time_mean_s_vgs'])} | {_fmt(r['time_per_assembled_s_baseline'])} / "
+                f"{_fmt(r['time_per_assembled_s_vgs'])} | {_gain_text(r)} |")
+        mean = part[part["train_run"] == "mean"].iloc[0]
+        seeds = int(mean["seeds"])
+        verdict = (f"{int(mean['seeds_with_positive_gain'])} of {seeds} training runs give VGS "
+                   "the shorter mean time; ")
+        if seeds > 1:
+            verdict += (f"the gain varies by {_fmt(mean['gain_sd_between_seeds'])} percentage "
+                        "points between runs (standard deviation); ")
+        else:
+            verdict += ("one training run only: its interval covers the test episodes' noise, "
+                        "not the spread between training runs; ")
+        if not math.isfinite(mean["gain_ci_low"]):
+            verdict += "too few successes for an interval."
+        elif mean["gain_ci_low"] > 0:
+            verdict += "the mean gain's interval lies above zero."
+        elif mean["gain_ci_high"] < 0:
+            verdict += "the mean gain's interval lies below zero: VGS is slower here."
+        else:
+            verdict += "the mean gain's interval includes zero: no difference shown."
+        if paper is not None:
+            verdict += f" The paper reports {paper:+.2f} %."
+        lines += ["", verdict, ""]
+    lines += [f"![gains per training run]({figure})", ""]
+    return "\n".join(lines)
+
+
+def seeds_report(folders: list[Path], dest: Path) -> Path:
+    """Write ``dest/seeds.md``, ``seeds.csv`` and ``seeds.png``; return the Markdown's path."""
+    table = seeds_table(load_seeds(folders))
+    dest.mkdir(parents=True, exist_ok=True)
+    table.to_csv(dest / "seeds.csv", index=False)
+    plot_seeds(table, dest / "seeds.png")
+    path = dest / "seeds.md"
+    path.write_text(seeds_markdown(table, folders, "seeds.png"))
+    return path

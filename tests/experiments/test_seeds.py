@@ -1,0 +1,95 @@
+"""Across training seeds: per-run gains and their mean where the answer is known."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from vgs.errors import ConfigError
+from vgs.experiments.seeds import load_seeds, mean_gain, seeds_report, seeds_table
+
+
+def _table(policy: str, times: np.ndarray, run: str, root_seed: int = 7) -> pd.DataFrame:
+    n = times.size
+    return pd.DataFrame({
+        "index": np.arange(n), "policy": policy, "condition": "nominal", "root_seed": root_seed,
+        "seed": np.arange(n) + 100, "peg_mass": 0.55, "peg_length": 0.1, "grasp_success": True,
+        "grasp_offset": 0.01, "success": True, "failure_reason": "", "assembly_time": times,
+        "adjustments": 3, "retries": 0, "grasp_offset_mm": 10.0 if policy == "vgs" else 30.0,
+        "train_run": run,
+    })
+
+
+def _folder(root: Path, run: str, speed_up: float, root_seed: int = 7,
+            policies: tuple[str, ...] = ("baseline", "vgs")) -> Path:
+    """A results folder whose VGS is ``speed_up`` (fraction) faster on the same scenes."""
+    rng = np.random.default_rng([int(run[1:]), abs(int(1000 * speed_up))])
+    base = rng.uniform(100, 160, 300)
+    times = {"baseline": base, "vgs": (1 - speed_up) * base + rng.normal(0, 1, 300),
+             "center": 0.5 * base}
+    folder = root / run
+    for policy in policies:
+        dest = folder / "eval" / policy / "nominal"
+        dest.mkdir(parents=True)
+        _table(policy, times[policy], run, root_seed).to_parquet(dest / "episodes.parquet")
+    return folder
+
+
+def test_two_runs_give_their_gains_and_the_mean(tmp_path: Path) -> None:
+    folders = [_folder(tmp_path, "s0", 0.10, policies=("baseline", "vgs", "center")),
+               _folder(tmp_path, "s1", 0.20)]
+    table = seeds_table(load_seeds(folders)).set_index("train_run")
+    assert table.loc["s0", "gain_pct"] == pytest.approx(10.0, abs=0.5)
+    assert table.loc["s1", "gain_pct"] == pytest.approx(20.0, abs=0.5)
+    mean = table.loc["mean"]
+    assert mean["gain_pct"] == pytest.approx(15.0, abs=0.5)
+    # The outer bootstrap level draws {s0, s0}, {s0, s1} or {s1, s1}: the interval spans the
+    # two runs' gains, far wider than either run's own interval.
+    assert 9.0 < mean["gain_ci_low"] < 12.0 and 18.0 < mean["gain_ci_high"] < 21.0
+    assert table.loc["s0", "gain_ci_high"] - table.loc["s0", "gain_ci_low"] < 2.0
+    assert mean["seeds"] == 2 and mean["seeds_with_positive_gain"] == 2
+    assert mean["gain_sd_between_seeds"] == pytest.approx(np.std([10, 20], ddof=1), abs=0.5)
+    assert mean["successes_baseline"] == 600
+
+
+def test_mean_gain_of_identical_runs_is_the_run_gain() -> None:
+    rng = np.random.default_rng(3)
+    base = rng.uniform(100, 160, 200)
+    pair = (_table("baseline", base, "s0"), _table("vgs", 0.9 * base, "s0"))
+    value, low, high = mean_gain([pair, pair, pair])
+    assert value == pytest.approx(10.0) and low == pytest.approx(10.0, abs=1e-6)
+    assert high == pytest.approx(10.0, abs=1e-6)
+
+
+def test_one_run_twice_is_refused(tmp_path: Path) -> None:
+    a = _folder(tmp_path / "a", "s0", 0.1)
+    b = _folder(tmp_path / "b", "s0", 0.1)
+    with pytest.raises(ConfigError, match="s0 is in both"):
+        load_seeds([a, b])
+
+
+def test_other_test_scenes_are_refused(tmp_path: Path) -> None:
+    folders = [_folder(tmp_path, "s0", 0.1), _folder(tmp_path, "s1", 0.1, root_seed=8)]
+    with pytest.raises(ConfigError, match="different test scenes"):
+        load_seeds(folders)
+
+
+def test_a_folder_without_learned_policies_is_refused(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match="no baseline or VGS"):
+        load_seeds([_folder(tmp_path, "s0", 0.1, policies=("center",))])
+    with pytest.raises(ConfigError, match="no evaluation results"):
+        load_seeds([tmp_path / "nothing"])
+
+
+def test_report_files(tmp_path: Path) -> None:
+    folders = [_folder(tmp_path, "s0", -0.05), _folder(tmp_path, "s1", 0.05)]
+    path = seeds_report(folders, tmp_path / "out")
+    text = path.read_text()
+    assert "1 of 2 training runs give VGS the shorter mean time" in text
+    assert "includes zero" in text and "+13.83 %" in text
+    assert (tmp_path / "out" / "seeds.png").stat().st_size > 10_000
+    csv = pd.read_csv(tmp_path / "out" / "seeds.csv")
+    assert list(csv["train_run"]) == ["s0", "s1", "mean"]
