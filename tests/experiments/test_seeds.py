@@ -67,8 +67,22 @@ def test_mean_gain_of_identical_runs_is_the_run_gain() -> None:
 def test_one_run_twice_is_refused(tmp_path: Path) -> None:
     a = _folder(tmp_path / "a", "s0", 0.1)
     b = _folder(tmp_path / "b", "s0", 0.1)
-    with pytest.raises(ConfigError, match="s0 is in both"):
+    with pytest.raises(ConfigError, match="s0 on the nominal condition is in both"):
         load_seeds([a, b])
+
+
+def test_one_run_on_other_conditions_in_another_folder(tmp_path: Path) -> None:
+    a = _folder(tmp_path / "a", "s0", 0.1)
+    b = _folder(tmp_path / "b", "s0", 0.2)
+    for path in (b / "eval").rglob("episodes.parquet"):
+        df = pd.read_parquet(path).assign(condition="mass")
+        dest = path.parent.parent / "mass"
+        dest.mkdir()
+        df.to_parquet(dest / "episodes.parquet")
+        path.unlink()
+    table = seeds_table(load_seeds([a, b])).set_index(["condition", "train_run"])
+    assert table.loc[("nominal", "s0"), "gain_pct"] == pytest.approx(10.0, abs=0.5)
+    assert table.loc[("mass", "s0"), "gain_pct"] == pytest.approx(20.0, abs=0.5)
 
 
 def test_other_test_scenes_are_refused(tmp_path: Path) -> None:

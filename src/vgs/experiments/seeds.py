@@ -56,13 +56,15 @@ def load_seeds(folders: list[Path]) -> pd.DataFrame:
 
     Raises:
         ConfigError: If a folder has no results, holds no baseline or VGS table, two folders hold
-            the same training run, or the folders' test scenes differ (another evaluation root
-            seed or number of episodes), so the gains would not be comparable.
+            the same training run on the same condition (one run may be evaluated on some
+            conditions in one folder and on others in another), or the folders' test scenes
+            differ (another evaluation root seed or number of episodes), so the gains would not
+            be comparable.
     """
     if not folders:
         raise ConfigError("seeds", "give at least one results folder")
     frames = []
-    owner: dict[str, Path] = {}
+    owner: dict[tuple[str, str], Path] = {}
     for folder in folders:
         try:
             df = load_results(folder)
@@ -73,11 +75,12 @@ def load_seeds(folders: list[Path]) -> pd.DataFrame:
             raise ConfigError("seeds", f"{folder} holds no baseline or VGS evaluation")
         if "train_run" not in df:
             df["train_run"] = "s?"
-        for run in sorted(set(df["train_run"])):
-            if run in owner:
-                raise ConfigError("seeds", f"training run {run} is in both {owner[run]} and "
-                                           f"{folder}; give each training seed once")
-            owner[run] = folder
+        for run, condition in sorted(set(zip(df["train_run"], df["condition"], strict=True))):
+            if (run, condition) in owner:
+                raise ConfigError("seeds", f"training run {run} on the {condition} condition is "
+                                           f"in both {owner[run, condition]} and {folder}; "
+                                           "give each run and condition once")
+            owner[run, condition] = folder
         frames.append(df.assign(source=str(folder)))
     df = pd.concat(frames, ignore_index=True)
     for condition, part in df.groupby("condition"):
@@ -237,10 +240,10 @@ def _gain_text(row: pd.Series) -> str:
     return f"{row['gain_pct']:+.1f} % [{row['gain_ci_low']:+.1f}, {row['gain_ci_high']:+.1f}]"
 
 
-def seeds_markdown(table: pd.DataFrame, folders: list[Path], figure: str) -> str:
+def seeds_markdown(table: pd.DataFrame, folders: list[Path], dest: Path, figure: str) -> str:
     """The tables of :func:`seeds_table` as Markdown."""
     lines = ["# VGS against the baseline, across training seeds", "",
-             "Written by `vgs seeds " + " ".join(str(f) for f in folders) + " --out ...` "
+             "Written by `vgs seeds " + " ".join(str(f) for f in folders) + f" --out {dest}` "
              "(module `vgs.experiments.seeds`). Each training run trains one baseline and one "
              "VGS network; both meet the same test scenes. Gain: (T_baseline - T_VGS) / "
              "T_baseline on the mean time of successful assemblies, 95 % interval from the "
@@ -295,5 +298,5 @@ def seeds_report(folders: list[Path], dest: Path) -> Path:
     table.to_csv(dest / "seeds.csv", index=False)
     plot_seeds(table, dest / "seeds.png")
     path = dest / "seeds.md"
-    path.write_text(seeds_markdown(table, folders, "seeds.png"))
+    path.write_text(seeds_markdown(table, folders, dest, "seeds.png"))
     return path
