@@ -39,13 +39,12 @@ from vgs.experiments.evaluate import CONDITIONS, summarize  # noqa: E402
 from vgs.experiments.report import (  # noqa: E402
     BOOTSTRAP_RESAMPLES,
     CONDITION_TITLES,
+    LEARNED,
     MIN_SUCCESSES,
     PAPER,
     efficiency_gain,
     load_results,
 )
-
-LEARNED = ("baseline", "vgs")
 
 
 def load_seeds(folders: list[Path]) -> pd.DataFrame:
