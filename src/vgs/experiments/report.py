@@ -99,6 +99,18 @@ def _mean_success(times: np.ndarray, ok: np.ndarray) -> float:
     return float(times[ok].mean()) if ok.any() else math.nan
 
 
+def time_arrays(df: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
+    """``(assembly_time, success)`` of an evaluation table, ordered by episode index."""
+    df = df.sort_values("index")
+    return df["assembly_time"].to_numpy(float), df["success"].to_numpy(bool)
+
+
+def gain_pct(tb: np.ndarray, ob: np.ndarray, tv: np.ndarray, ov: np.ndarray) -> float:
+    """``100 (T_base - T_vgs) / T_base`` on the mean times of the successes (NaN without any)."""
+    mb, mv = _mean_success(tb, ob), _mean_success(tv, ov)
+    return 100.0 * (mb - mv) / mb if math.isfinite(mb) and math.isfinite(mv) else math.nan
+
+
 def efficiency_gain(base: pd.DataFrame, vgs: pd.DataFrame, resamples: int = BOOTSTRAP_RESAMPLES,
                     seed: int = 0) -> Gain:
     """``100 (T_base - T_vgs) / T_base`` on mean successful assembly times, bootstrap 95 % CI.
@@ -108,15 +120,11 @@ def efficiency_gain(base: pd.DataFrame, vgs: pd.DataFrame, resamples: int = BOOT
     ``index`` when both tables hold the same indices (the same scenes); otherwise each table is
     resampled on its own.
     """
-    def arrays(df: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
-        return df["assembly_time"].to_numpy(float), df["success"].to_numpy(bool)
-
     base = base.sort_values("index")
     vgs = vgs.sort_values("index")
-    tb, ob = arrays(base)
-    tv, ov = arrays(vgs)
-    mb, mv = _mean_success(tb, ob), _mean_success(tv, ov)
-    value = 100.0 * (mb - mv) / mb if math.isfinite(mb) and math.isfinite(mv) else math.nan
+    tb, ob = time_arrays(base)
+    tv, ov = time_arrays(vgs)
+    value = gain_pct(tb, ob, tv, ov)
     paired = list(base["index"]) == list(vgs["index"])
     if not math.isfinite(value) or min(ob.sum(), ov.sum()) < MIN_SUCCESSES:
         return Gain(value, math.nan, math.nan, paired, len(base))
@@ -125,8 +133,7 @@ def efficiency_gain(base: pd.DataFrame, vgs: pd.DataFrame, resamples: int = BOOT
     for b in range(resamples):
         ib = rng.integers(len(tb), size=len(tb))
         iv = ib if paired else rng.integers(len(tv), size=len(tv))
-        mb_b, mv_b = _mean_success(tb[ib], ob[ib]), _mean_success(tv[iv], ov[iv])
-        gains[b] = 100.0 * (mb_b - mv_b) / mb_b
+        gains[b] = gain_pct(tb[ib], ob[ib], tv[iv], ov[iv])
     gains = gains[np.isfinite(gains)]
     low, high = (np.percentile(gains, [2.5, 97.5]) if gains.size else (math.nan, math.nan))
     return Gain(value, float(low), float(high), paired, len(base))

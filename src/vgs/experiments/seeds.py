@@ -43,7 +43,9 @@ from vgs.experiments.report import (  # noqa: E402
     MIN_SUCCESSES,
     PAPER,
     efficiency_gain,
+    gain_pct,
     load_results,
+    time_arrays,
 )
 
 
@@ -95,18 +97,6 @@ def load_seeds(folders: list[Path]) -> pd.DataFrame:
     return df
 
 
-def _times(df: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
-    df = df.sort_values("index")
-    return df["assembly_time"].to_numpy(float), df["success"].to_numpy(bool)
-
-
-def _gain(tb: np.ndarray, ob: np.ndarray, tv: np.ndarray, ov: np.ndarray) -> float:
-    if not ob.any() or not ov.any():
-        return math.nan
-    mb, mv = tb[ob].mean(), tv[ov].mean()
-    return 100.0 * (mb - mv) / mb
-
-
 def mean_gain(pairs: list[tuple[pd.DataFrame, pd.DataFrame]],
               resamples: int = BOOTSTRAP_RESAMPLES, seed: int = 0) -> tuple[float, float, float]:
     """Mean over training runs of the gain, with the two-level bootstrap 95 % interval.
@@ -120,8 +110,8 @@ def mean_gain(pairs: list[tuple[pd.DataFrame, pd.DataFrame]],
         ``(mean gain, low, high)`` in percent; the interval is NaN when a run has fewer than
         :data:`vgs.experiments.report.MIN_SUCCESSES` successes for either policy.
     """
-    arrays = [(*_times(b), *_times(v)) for b, v in pairs]
-    gains = [_gain(*a) for a in arrays]
+    arrays = [(*time_arrays(b), *time_arrays(v)) for b, v in pairs]
+    gains = [gain_pct(*a) for a in arrays]
     value = float(np.mean(gains)) if gains else math.nan
     if (not math.isfinite(value)
             or min(min(a[1].sum(), a[3].sum()) for a in arrays) < MIN_SUCCESSES):
@@ -133,7 +123,7 @@ def mean_gain(pairs: list[tuple[pd.DataFrame, pd.DataFrame]],
         for s in rng.integers(len(arrays), size=len(arrays)):
             tb, ob, tv, ov = arrays[s]
             i = rng.integers(len(tb), size=len(tb))
-            total += _gain(tb[i], ob[i], tv[i], ov[i])
+            total += gain_pct(tb[i], ob[i], tv[i], ov[i])
         out[b] = total / len(arrays)
     out = out[np.isfinite(out)]
     if not out.size:
