@@ -128,24 +128,24 @@ class GripperConfig:
     Attributes:
         force: Force-limited closing force per finger pair [N], 3-40 N on the RG2.
         stroke: Full opening [m].
-        pad_friction: Sliding friction of the finger pads.
-        pad_torsional_friction: Torsional friction of the pads [m] (MuJoCo's second friction
-            coefficient: the torque limit is this times the normal force). A cylinder pressed
-            on a flat pad touches along a line of the pad's length L = 22 mm; with uniform
-            pressure, turning it about the line's midpoint takes mu F L / 4, so the
-            coefficient is mu L / 4 = 5.5 mm for mu = 1.
-        pad_rolling_friction: Rolling friction of the pads [m]. 0 (the default) gives the pad
-            contacts ``condim=4`` (sliding and torsional friction); > 0 gives ``condim=6``. The
-            peg touches each pad along a line, which MuJoCo resolves into two contact points, so
-            sliding friction at the points already resists rotation about the pad-plane axes;
-            rolling friction adds little but costs a quarter of the physics time in contact.
+        pad_friction: Sliding friction of the finger pads against the peg (rubber-faced pads
+            on a machined metal peg: about 1).
+        pad_torsional_friction: MuJoCo's torsional coefficient of the pad contacts [m] (the
+            torque limit of one contact point is this times its normal force). Each pad's line
+            contact is two point contacts placed so that their sliding friction resists the
+            line's torsion, mu F L / 4 (:func:`vgs.sim.rg2.pad_contact_half_length`); the
+            torsional term stands only for each point's own contact patch, about (2/3) mu a
+            for a patch of radius a = 1.5 mm: 1 mm. It also lets MuJoCo's no-slip solver pin
+            the contact: with ``condim=3`` pads one iteration leaves the peg creeping.
+        pad_rolling_friction: Rolling friction of the pads [m] (0: none; > 0 gives the pads
+            ``condim=6``).
         closing_speed: Finger closing speed [m/s] (RG2: about 0.11 m/s full stroke in 1 s).
     """
 
     force: float = 40.0
     stroke: float = 0.110
     pad_friction: float = 1.0
-    pad_torsional_friction: float = 0.0055
+    pad_torsional_friction: float = 0.001
     pad_rolling_friction: float = 0.0
     closing_speed: float = 0.11
 
@@ -217,17 +217,17 @@ class SimConfig:
         impratio: Ratio of frictional to normal constraint impedance (MuJoCo ``impratio``);
             values > 1 make static friction stiffer, which a friction grasp needs.
         noslip_iterations: Iterations of MuJoCo's no-slip post-solver (0 = off). MuJoCo's
-            friction is soft: under a sustained moment below the static limit a peg held 35 mm
-            from its centre of mass turns in the pads at about 1 deg/s; one iteration stops that
-            creep but costs 15-25 % of the real-time factor, and over 100 centre-grasp seeds it
-            did not assemble more often (docs/assembly.md, "No-slip solver").
+            friction is soft: without it a peg held 35 mm from its centre of mass (0.19 N m,
+            under half the grasp's capacity) creeps round in the pads at about 3 deg/s; one
+            iteration pins every sticking contact, so the grasp holds below its capacity and
+            slips above it (tests/test_grasp_hold.py, docs/cell.md "The grasp").
     """
 
     timestep: float = 0.002
     control_decimation: int = 5
     contact_timeconst: float = 0.004
     impratio: float = 10.0
-    noslip_iterations: int = 0
+    noslip_iterations: int = 1
 
     def __post_init__(self) -> None:
         _positive(self, "timestep", "contact_timeconst", "impratio", prefix="sim.")
@@ -318,8 +318,13 @@ class AssemblyConfig:
     Attributes:
         insertion_depth: K in delta = arctan(clearance / K) [m] (paper eq. 1).
         approach_height: Height of the peg tip above the hole surface before contact [m].
+        approach_speed: Speed of the guarded descent to plane contact [m/s]; the descent
+            starts where the longest peg the product data allows would clear the surface.
         contact_force: Force threshold that declares plane contact [N].
-        press_force: Constant downward force during search and alignment [N].
+        press_force: Constant downward force during search, slide, alignment and insertion
+            [N]. Sized to the grasp: pressed at the rim (15 mm off the axis) and dragged with
+            friction 0.4 at a lever up to 89 mm, 5 N loads the pads with about 0.25 N m, under
+            the moment limit below.
         search_tilt_deg: Tilt of the peg during the spiral search [deg]; the leading rim point
             drops into the hole first and produces two-point contact.
         spiral_pitch: Radial growth of the Archimedes spiral per turn [m]; by default the
@@ -330,8 +335,16 @@ class AssemblyConfig:
             beyond it (the hole lies within its own radius of the nominal position).
         drop_threshold: Drop of the TCP below the plane-contact height that declares two-point
             contact [m].
-        slide_speed: Speed of the sliding phase [m/s].
-        three_point_force: Lateral contact force that declares three-point contact [N].
+        slide_speed: Free sliding speed of the slide under its bias [m/s] (the lateral
+            damping is the bias over this speed); a quarter of it counts as still.
+        three_point_force: Lateral bias of the slide along the measured reaction [N]; when the
+            measured lateral force balances it and the TCP stands still: three-point contact.
+        search_stiffness: Lateral admittance stiffness during the spiral search [N/m].
+        insert_stiffness: Lateral admittance stiffness during insertion [N/m].
+        moment_limit_fraction: The controller keeps the measured moment about the pinch axis
+            under this fraction of the grasp's capacity
+            (:func:`vgs.sim.rg2.grasp_moment_capacity`): its rotational stiffness in contact
+            is the limit over 2 deg, and wiggles and turns stop at the limit.
         wiggle_amplitude_deg: Amplitude of the wiggle rotation [deg].
         wiggle_period: Period of one wiggle [s].
         align_gain: Rotation per measured contact moment [rad / (N m)] in the alignment phase.
@@ -341,19 +354,23 @@ class AssemblyConfig:
 
     insertion_depth: float = 0.030
     approach_height: float = 0.010
-    contact_force: float = 3.0
-    press_force: float = 10.0
+    approach_speed: float = 0.01
+    contact_force: float = 2.0
+    press_force: float = 5.0
     search_tilt_deg: float = 6.0
     spiral_pitch: float = 0.004
     spiral_speed: float = 0.01
     search_radius: float = 0.02
     drop_threshold: float = 0.001
-    slide_speed: float = 0.004
+    slide_speed: float = 0.01
     three_point_force: float = 3.0
+    search_stiffness: float = 2000.0
+    insert_stiffness: float = 300.0
+    moment_limit_fraction: float = 0.5
     wiggle_amplitude_deg: float = 1.0
     wiggle_period: float = 1.0
     align_gain: float = 0.5
-    insert_speed: float = 0.01
+    insert_speed: float = 0.003
     timeouts: tuple[tuple[str, float], ...] = (
         ("transport", 20.0),
         ("approach", 20.0),
@@ -367,9 +384,12 @@ class AssemblyConfig:
         _positive(
             self, "insertion_depth", "approach_height", "contact_force", "press_force",
             "spiral_pitch", "spiral_speed", "search_radius", "drop_threshold", "slide_speed",
-            "three_point_force",
+            "three_point_force", "approach_speed", "search_stiffness", "insert_stiffness",
             "wiggle_period", "insert_speed", prefix="assembly.",
         )
+        if not 0.0 < self.moment_limit_fraction <= 1.0:
+            raise ConfigError("assembly.moment_limit_fraction",
+                              f"must lie in (0, 1], got {self.moment_limit_fraction!r}")
         _non_negative(self, "search_tilt_deg", "wiggle_amplitude_deg", "align_gain",
                       prefix="assembly.")
         for name, value in self.timeouts:

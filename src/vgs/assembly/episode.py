@@ -11,6 +11,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
+import mujoco
 import numpy as np
 
 from vgs.assembly.grasp import grasp
@@ -76,6 +77,63 @@ def center_policy() -> Policy:
     return offset_policy(0.0)
 
 
+class GraspWatch:
+    """Ground truth of the grasp during the assembly, for the record only (never seen by the
+    controller): how far the peg turns in the pads, and the largest moment about the pinch
+    axis (tool y) that the pads' contact forces exert on the peg, about the TCP.
+
+    Attached to :attr:`vgs.control.robot.Robot.observers` after the grasp; it stops
+    looking when the robot starts to release the peg.
+    """
+
+    def __init__(self, robot: Robot, every: int = 2) -> None:
+        self.robot = robot
+        self.cell = robot.cell
+        self.every = every
+        self._n = 0
+        self._R0 = self._relative()
+        self.turn_deg = 0.0
+        self.peak_moment = 0.0
+        self._f = np.zeros(6)
+        ids = self.cell.ids
+        m = self.cell.model
+        finger_bodies = {int(m.geom_bodyid[g]) for g in ids.pad_geoms}
+        self._pads = {g for g in range(m.ngeom) if int(m.geom_bodyid[g]) in finger_bodies}
+        self._peg = int(ids.peg_geom)
+
+    def _relative(self) -> np.ndarray:
+        """The peg's axis in the tool frame (its spin about its own axis does not matter)."""
+        d, ids = self.cell.data, self.cell.ids
+        R_tcp = d.site_xmat[ids.tcp_site].reshape(3, 3)
+        return R_tcp.T @ d.xmat[ids.peg_body].reshape(3, 3)[:, 2]
+
+    def __call__(self) -> None:
+        if self.robot.phase == "release":
+            return
+        self._n += 1
+        if self._n % self.every:
+            return
+        cos = float(np.dot(self._relative(), self._R0))
+        self.turn_deg = math.degrees(math.acos(max(-1.0, min(1.0, cos))))
+        m, d, ids = self.cell.model, self.cell.data, self.cell.ids
+        tcp = d.site_xpos[ids.tcp_site]
+        pinch = d.site_xmat[ids.tcp_site].reshape(3, 3)[:, 1]
+        moment = 0.0
+        for i in range(d.ncon):
+            c = d.contact[i]
+            g1, g2 = int(c.geom[0]), int(c.geom[1])
+            if self._peg not in (g1, g2) or not ({g1, g2} & self._pads):
+                continue
+            mujoco.mj_contactForce(m, d, i, self._f)
+            frame = c.frame.reshape(3, 3)
+            f = frame.T @ self._f[:3]  # on geom2, world frame
+            # Torsional friction: a torque about the contact normal (frame's first row).
+            tau = self._f[3] * frame[0] if c.dim >= 4 else 0.0
+            sign = -1.0 if g1 == self._peg else 1.0
+            moment += sign * float(np.dot(np.cross(c.pos - tcp, f) + tau, pinch))
+        self.peak_moment = max(self.peak_moment, abs(moment))
+
+
 class EpisodeRunner:
     """Runs episodes; keeps one compiled cell per peg geometry.
 
@@ -132,7 +190,7 @@ class EpisodeRunner:
             inside = 0 <= row < hm.depth.shape[0] and 0 <= col < hm.depth.shape[1]
             surface = float(hm.depth[row, col]) if inside else 0.0
             robot.run(0.2)
-            robot.ft.tare()  # tool only, before the grasp
+            robot.arm.tare()  # tool only, before the grasp
             result = grasp(robot, command.x, command.y, command.yaw, surface)
         except SimulationError:
             record.failure_reason = "unstable"
@@ -145,7 +203,12 @@ class EpisodeRunner:
         nominal = self.cfg.cell.peg
         module = AssemblyModule(robot, self.cfg.assembly, nominal, self.cfg.cell.hole.nominal_xy,
                                 self.cfg.cell.hole.depth)
+        watch = GraspWatch(robot)
+        robot.observers.append(watch)
         module.run(record)
+        robot.observers.remove(watch)
+        record.peg_turn_deg = watch.turn_deg
+        record.peak_grasp_moment = watch.peak_moment
         self._ground_truth(cell, record)
         return record, robot, hm
 

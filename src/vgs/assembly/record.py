@@ -31,6 +31,13 @@ class EpisodeRecord:
         hole_offset_mm: Ground truth displacement of the hole from its nominal position [mm].
         final_tilt_deg: Ground truth tilt of the peg axis from vertical at the end [deg].
         insertion_depth_mm: Ground truth depth of the peg's lower end below the entrance [mm].
+        peak_moment_measured: Largest moment about the pinch axis the controller measured with
+            the F/T sensor in contact [N m].
+        peg_turn_deg: Ground truth (analysis only): how far the peg turned in the pads between
+            the end of the grasp and the end of the assembly [deg].
+        peak_grasp_moment: Ground truth (analysis only): largest moment about the pinch axis
+            that the pads' contact forces exerted on the peg, about the TCP, sampled every
+            control tick of the assembly [N m].
     """
 
     seed: int
@@ -47,6 +54,9 @@ class EpisodeRecord:
     hole_offset_mm: float = math.nan
     final_tilt_deg: float = math.nan
     insertion_depth_mm: float = math.nan
+    peak_moment_measured: float = math.nan
+    peg_turn_deg: float = math.nan
+    peak_grasp_moment: float = math.nan
 
     def to_row(self) -> dict[str, object]:
         """Flat dict (one table row): phase times become ``time_<phase>_s`` columns."""

@@ -48,11 +48,22 @@ from vgs.config import AssemblyConfig, PegConfig
 from vgs.control.robot import Robot
 from vgs.control.transforms import exp_so3, rot_y, rot_z
 from vgs.errors import SimulationError
+from vgs.sim.rg2 import PAD_HALF, grasp_moment_capacity
 
 GRAVITY = 9.81
+DEBUG = False
+import os
+ROT_DAMPING = float(os.environ.get("RD", "2.5"))
+KS = float(os.environ["KS"]) if "KS" in os.environ else None
+CONTACT_DAMPING = float(os.environ.get("TD", "1000"))
 ENTRY_DEPTH = 0.004  # descent below the three-point height that means "entered the hole" [m]
 SETTLE_TIME = 0.3  # still time before taring [s]
-ALIGNED_MOMENT = 0.3  # contact moment below which the peg bears on no wall [N m]
+LENGTH_TOLERANCE = 0.15  # the product data's length tolerance: the transport clears it
+LOST_WIDTH_FRACTION = 0.8  # finger width below this fraction of the diameter: peg lost
+RETRY_LIFT = 0.012  # lift before a new search [m]
+ROT_COMPLIANCE_ANGLE = math.radians(2.0)  # reference lead that loads the grasp to its limit
+SLIDE_FILTER_TIME = 0.1  # time constant of the lateral reaction filter in the slide [s]
+THREE_POINT_TIME = 0.3  # balanced and still this long: three-point contact [s]
 Z_FILTER_TIME = 0.1  # time constant of the TCP-height filter in the search [s]
 MAX_RETRIES = 3  # new searches after a wrong contact-state decision
 MAX_ALIGN_ADJUSTMENTS = 15  # adjustments in one alignment before it is judged lost
@@ -72,14 +83,22 @@ class PhaseTimeout(Exception):
         self.phase = phase
 
 
+class PegLost(Exception):
+    """The grasp watch saw the peg leave the pads (finger width or weight)."""
+
+
 @dataclass
 class PegEstimate:
-    """What the controller believes about the held peg (from F/T and the nominal product data)."""
+    """What the controller believes about the held peg (from F/T and the nominal product data).
 
-    mass: float
-    com_x: float  # centre of mass along the tool x axis, from the pads [m]
+    It is not told where the peg is held and does not estimate it: the F/T moment of the
+    horizontal peg says only which end is the longer one, and that end hangs down. Rotations
+    "about the lower end" use the nominal half length as the distance from the pads.
+    """
+
+    weight: float  # measured weight of the held peg [N]
     down_sign: float  # +1: tool +x points down after turning upright
-    hanging: float  # estimated distance from pads to the lower end [m]
+    hanging: float  # assumed distance from the pads to the lower end: L_nominal / 2 [m]
 
 
 class AssemblyModule:
@@ -106,6 +125,11 @@ class AssemblyModule:
         self.phase_times: dict[str, float] = {}
         self.estimate: PegEstimate | None = None
         self._timeouts = dict(cfg.timeouts)
+        self.peak_moment = 0.0
+        # The grasp's capacity is the robot's own hardware data (RG2 force, pad friction).
+        self.capacity = grasp_moment_capacity(robot.cell.cfg.gripper)
+        self.moment_limit = cfg.moment_limit_fraction * self.capacity
+        self.aligned_moment = 0.5 * self.moment_limit
 
     # -- bookkeeping --------------------------------------------------------------------------
 
@@ -156,28 +180,35 @@ class AssemblyModule:
         except PhaseTimeout as exc:
             self._end(exc.phase)
             record.failure_reason = f"timeout:{exc.phase}"
+        except PegLost:
+            self._end(self.robot.phase)
+            record.failure_reason = "peg_lost"
         except SimulationError:
             record.failure_reason = "unstable"
         record.assembly_time = self.robot.time - start
         record.phase_times.update(self.phase_times)
         record.adjustments = self.adjustments
         record.retries = self.retries
+        record.peak_moment_measured = self.peak_moment
         self.release()
 
     # -- phases -------------------------------------------------------------------------------
 
     def estimate_peg(self) -> PegEstimate:
-        """Weight and moment of the held peg from the F/T sensor (tared before the grasp)."""
+        """Which end of the held, horizontal peg is longer, from the F/T sensor (tared before
+        the grasp): the weight's moment about the pinch axis is ``tau_y = -m g c``, so the
+        sign of ``-tau_y`` is the side of the centre of mass. Only that sign is kept."""
         w = self.robot.arm.wrench_sensor
-        mass = max(w[2], 0.05) / GRAVITY
-        com_x = -w[4] / max(w[2], 0.05)
-        sign = 1.0 if com_x >= 0 else -1.0
-        hanging = 0.5 * self.peg.length + abs(com_x)
-        return PegEstimate(mass=mass, com_x=com_x, down_sign=sign, hanging=hanging)
+        weight = float(w[2])
+        if weight < 0.5 * self.peg.mass * GRAVITY:
+            raise PegLost
+        sign = 1.0 if -w[4] >= 0 else -1.0
+        return PegEstimate(weight=weight, down_sign=sign, hanging=0.5 * self.peg.length)
 
     def transport(self) -> None:
         robot = self.robot
         robot.run(SETTLE_TIME)
+        self._check_grasp()
         est = self.estimate = self.estimate_peg()
         p0, R0 = robot.arm.tcp_pose()
         # Stage 1 (tool still pointing down): yaw about the vertical so that, after stage 2,
@@ -187,17 +218,40 @@ class AssemblyModule:
         yaw_now = math.atan2(R0[1, 0], R0[0, 0])
         dyaw = (x_heading - yaw_now + math.pi) % (2 * math.pi) - math.pi
         R_yaw = rot_z(dyaw) @ R0
-        # Stage 2: roll about the pinch axis (tool y) so that the longer part hangs down.
+        # Stage 2: roll about the pinch axis (tool y) so that the longer part hangs down. For
+        # either end the arm, the gripper and the peg end in the same pose (the tool frames
+        # differ by a half turn about the tool axis, which swaps the fingers).
         R_asm = R_yaw @ rot_y(-est.down_sign * math.pi / 2)
         self.R_asm = R_asm
-        target = np.array([*self.hole_xy, self.surface_z + est.hanging + 0.03])
+        # The pinch axis as a world direction that does not depend on which end hangs down:
+        # every tilt, lean and slide below is the same motion for both.
+        self.tilt_axis = est.down_sign * R_asm[:, 1]
+        # High enough for the longest peg the product data allows with the pads at its end.
+        clearance = self.peg.length * (1.0 + LENGTH_TOLERANCE) + 0.01
+        target = np.array([*self.hole_xy, self.surface_z + clearance])
         lift = p0 + np.array([0.0, 0.0, 0.06])
         robot.move_to(lift, R_yaw, speed=0.2, angular_speed=1.5, settle=0.0)
-        above = np.array([target[0], target[1], lift[2]])
+        self._check_grasp()
+        above = np.array([target[0], target[1], max(lift[2], target[2])])
         robot.move_to(above, R_asm, speed=0.25, angular_speed=1.2, settle=0.0)
         self._check_timeout("transport")
         robot.move_to(target, R_asm, speed=0.15, angular_speed=1.2, settle=SETTLE_TIME)
+        self._check_grasp()
         self._check_timeout("transport")
+
+    # -- the grasp watch ------------------------------------------------------------------
+
+    def _check_grasp(self) -> None:
+        """Raise :class:`PegLost` when the fingers have closed past the peg (its nominal
+        diameter less a tolerance): the RG2's width reading, the robot's own signal."""
+        if self.robot.gripper.width() < LOST_WIDTH_FRACTION * self.peg.diameter:
+            raise PegLost
+
+    def _check_weight(self) -> None:
+        """In free air after the tare at the upright pose: a peg that fell out shows as an
+        upward force of its weight on the tared sensor."""
+        if self.robot.arm.wrench[2] > 0.5 * self.estimate.weight:
+            raise PegLost
 
     def _down(self) -> np.ndarray:
         """Estimated peg axis pointing down, from the commanded tool orientation."""
@@ -215,49 +269,99 @@ class AssemblyModule:
         n = np.linalg.norm(v)
         return np.zeros(3) if n < 1e-9 else self.peg.radius * v / n
 
+    def _moment(self) -> float:
+        """Measured moment about the pinch axis at the TCP (the pads) [N m]."""
+        return float(np.dot(self.robot.arm.wrench[3:], self.tilt_axis))
+
+    def _comply(self, lateral: float, lateral_damping: float = 0.0, z_damping: float = 0.0,
+                k_rot: float | None = None) -> None:
+        """Admittance in contact.
+
+        Stiffness ``lateral`` in x and y, force control in z, and a rotational stiffness that
+        keeps the moment on the grasp below its capacity: a reference that runs
+        ``ROT_COMPLIANCE_ANGLE`` ahead of a jammed peg loads the pads with ``moment_limit``
+        (assembly.moment_limit_fraction of the grasp's capacity); ``k_rot`` overrides it.
+
+        Damping: a contact is a spring k_c on the peg; the discrete admittance loop at the
+        control period dt stays stable for D > k_c dt on every axis the contact loads
+        (the rule of :mod:`vgs.control.admittance`). Translation: at least
+        ``CONTACT_DAMPING`` laterally (``lateral_damping`` where larger: it sets the speed of a
+        force-controlled slide) and ``controller.force_damping`` in z (``z_damping`` where
+        larger). Rotation: the lower end in contact is a lateral spring at the lever h below
+        the pads, a rotational stiffness k_c h^2 about them (about 250 N m/rad for MuJoCo's
+        4 ms contacts on a 0.55 kg peg at h = 85 mm), so D >= ``ROT_DAMPING``.
+        """
+        if k_rot is None:
+            k_rot = self.moment_limit / ROT_COMPLIANCE_ANGLE
+        d_lat = max(CONTACT_DAMPING, lateral_damping)
+        d_z = max(self.robot.cfg.force_damping, z_damping)
+        self.robot.arm.admittance.set_stiffness(
+            np.array([lateral, lateral, 0.0, k_rot, k_rot, k_rot]),
+            damping=np.array([d_lat, d_lat, d_z, ROT_DAMPING, ROT_DAMPING, ROT_DAMPING]))
+
     def approach(self) -> None:
         robot, cfg, est = self.robot, self.cfg, self.estimate
         robot.arm.set_compliant(False)
         if self.retries == 0:
-            robot.ft.tare()  # once, at the nominal upright pose
+            robot.arm.set_payload(self.peg.mass)  # nominal mass, at the pads
+            robot.arm.tare()  # once, at the nominal upright pose
             target_xy = self.hole_xy
         else:
             # Recovery: lift, stand the peg upright about its lower end, search around here.
             target_xy = (self._tip() + self._lowest_rim_offset(robot.arm.R_ref))[:2]
-            p = robot.arm.p_ref + np.array([0.0, 0.0, 0.012])
+            # Out of the hole first (above the first plane contact), then turn.
+            p = robot.arm.p_ref.copy()
+            p[2] = max(p[2] + RETRY_LIFT, self.z_contact + RETRY_LIFT)
             robot.move_to(p, robot.arm.R_ref, speed=0.02, settle=0.0)
             robot.move_to(robot.arm.p_ref, self.R_asm, speed=0.02, angular_speed=0.3,
-                          settle=0.0)
-        p, R = robot.arm.p_ref.copy(), robot.arm.R_ref.copy()
-        # Tilt about the pinch axis (tool y) around the estimated lower end.
-        axis = R[:, 1]
-        self.tilt_axis = axis
+                          settle=SETTLE_TIME)
+            self._check_weight()
+        self._check_grasp()
+        p, R = robot.arm.p_ref.copy(), self.R_asm.copy()
+        # Tilt about the pinch axis around the estimated lower end.
+        axis = self.tilt_axis
         psi = math.radians(cfg.search_tilt_deg)
         Rt = exp_so3(psi * axis)
         tip = p + est.hanging * est.down_sign * R[:, 0]
         R_tilt = Rt @ R
         p_tilt = tip + Rt @ (p - tip)
-        # Place the lowest rim point above the target, approach_height above the surface.
+        # Place the lowest rim point above the target at the start height.
         low = tip + self._lowest_rim_offset(R_tilt)
-        shift = np.array([*(target_xy - low[:2]),
-                          self.surface_z + cfg.approach_height - low[2]])
+        # Down to where the longest peg the product data allows, held at its end, would be
+        # approach_height above the surface.
+        longest = self.peg.length * (1.0 + LENGTH_TOLERANCE) - PAD_HALF[0]
+        z_start = self.surface_z + cfg.approach_height + longest + (p_tilt - tip)[2]
+        shift = np.array([*(target_xy - low[:2]), min(z_start - p_tilt[2], 0.0)])
         robot.move_to(p_tilt + shift, R_tilt, speed=0.05, angular_speed=0.5, settle=SETTLE_TIME)
         self.low_rim_from_tcp = (low + shift) - (p_tilt + shift)
         robot.arm.set_compliant(True)
         adm = robot.arm.admittance
-        adm.set_stiffness(np.array([2000.0, 2000.0, 0.0, *[robot.cfg.rot_stiffness * 10] * 3]))
-        adm.wrench_des[:] = [0.0, 0.0, -cfg.press_force, 0, 0, 0]
+        self._comply(cfg.search_stiffness, k_rot=KS)
+        # Guarded descent: force control in z, moving at approach_speed in free air, pressing
+        # with press_force once in contact.
+        self._comply(cfg.search_stiffness, k_rot=KS)
+        adm.wrench_des[:] = 0.0
+        adm.wrench_des[2] = -adm.damping[2] * cfg.approach_speed
         while robot.arm.wrench[2] < cfg.contact_force:
-            robot.run(robot.dt)
+            robot.tick()
+            self._watch()
             self._check_timeout("approach")
+        adm.wrench_des[2] = -cfg.press_force
         self.z_contact = robot.arm.tcp_pose()[0][2]
+
+    def _watch(self) -> None:
+        """Per-tick checks in contact: the finger width, and the peak measured moment."""
+        m = abs(self._moment())
+        if m > self.peak_moment:
+            self.peak_moment = m
+        self._check_grasp()
 
     def search(self) -> None:
         robot, cfg = self.robot, self.cfg
         adm = robot.arm.admittance
-        adm.wrench_des[2] = -cfg.press_force
+        adm.wrench_des[:] = [0.0, 0.0, -cfg.press_force, 0.0, 0.0, 0.0]
         robot.arm.absorb_offset()
-        adm.set_stiffness(np.array([2000.0, 2000.0, 0.0, *[self.robot.cfg.rot_stiffness * 10] * 3]))
+        self._comply(cfg.search_stiffness, k_rot=KS)
         center = robot.arm.p_ref[:2].copy()
         theta = 0.0
         b = cfg.spiral_pitch / (2 * math.pi)
@@ -282,6 +386,7 @@ class AssemblyModule:
             p_ref[1] = center[1] + r * math.sin(theta)
             robot.arm.set_reference(p_ref, robot.arm.R_ref)
             robot.tick()
+            self._watch()
             # Low-pass filtered TCP height: the rubbing spiral's stick-slip makes it chatter.
             z_f += alpha * (float(tcp_z[0]) - z_f)
             while window and window[-1][1] <= z_f:
@@ -299,32 +404,65 @@ class AssemblyModule:
             self._check_timeout("search")
 
     def slide(self) -> None:
+        """Two-point contact (Fig. 3a): pressing on, the lateral axes are force-controlled with
+        a bias towards the lowest rim point; the hole's reaction and the bias slide the peg
+        until the rim meets the far wall. Three-point contact (Fig. 2c) from the F/T signal:
+        the measured lateral force balances the bias (the wall pushes back) while the TCP
+        stands still."""
         robot, cfg = self.robot, self.cfg
         adm = robot.arm.admittance
         robot.arm.absorb_offset()
         lead = self.low_rim_from_tcp[:2] / max(np.linalg.norm(self.low_rim_from_tcp[:2]), 1e-9)
-        adm.set_stiffness(np.array([0.0, 0.0, 0.0, *[self.robot.cfg.rot_stiffness * 10] * 3]))
-        adm.wrench_des[:3] = [*(cfg.three_point_force * lead), -cfg.press_force]
-        still = 0.0
-        last = robot.arm.tcp_pose()[0][:2]
-        window = 0.2
-        while still < 0.3:
-            robot.run(window)
-            now = robot.arm.tcp_pose()[0][:2]
-            still = still + window if np.linalg.norm(now - last) < cfg.slide_speed * window else 0.0
-            last = now
+        # Lateral damping for a free sliding speed of slide_speed under the bias (z keeps it
+        # too: the press force holds it on the contact).
+        self._comply(0.0, lateral_damping=cfg.three_point_force / cfg.slide_speed)
+        adm.wrench_des[:] = [*(cfg.three_point_force * lead), -cfg.press_force, 0.0, 0.0, 0.0]
+        f_lat = np.zeros(2)
+        alpha = robot.dt / (SLIDE_FILTER_TIME + robot.dt)
+        window = max(1, int(round(THREE_POINT_TIME / robot.dt)))
+        still = 0
+        start = robot.arm.tcp_pose()[0][:2]
+        last = start
+        n = 0
+        while True:
+            robot.tick()
+            self._watch()
+            f_lat += alpha * (robot.arm.wrench[:2] - f_lat)
+            n += 1
+            # The rim cannot travel further than across the hole, nor climb back onto the
+            # surface, while it is in the hole: the drop was not the hole.
+            if (np.linalg.norm(robot.arm.tcp_pose()[0][:2] - start) > self.peg.diameter
+                    or robot.arm.tcp_height() > self.z_search + cfg.drop_threshold):
+                raise Recovery
+            if n % window == 0:
+                now = robot.arm.tcp_pose()[0][:2]
+                moving = np.linalg.norm(now - last) > 0.25 * cfg.slide_speed * THREE_POINT_TIME
+                last = now
+                balanced = float(np.dot(f_lat, lead)) < -0.7 * cfg.three_point_force
+                still = still + 1 if (balanced and not moving) else 0
+                if DEBUG:
+                    print(f"slide t={robot.time:.2f} f_lat={np.round(f_lat, 2)} lead={np.round(lead, 2)} "
+                          f"tcp={np.round(now * 1000, 2)} z={robot.arm.tcp_height() * 1000:.2f} "
+                          f"M={self._moment():.2f} tilt={math.degrees(self._commanded_tilt()):.1f} "
+                          f"off={np.round(adm.offset, 3)}")
+                if still >= 1:
+                    break
             self._check_timeout("slide")
         self.z_three = robot.arm.tcp_pose()[0][2]
         if self.z_three > self.z_search - self.cfg.drop_threshold:
             raise Recovery  # the peg is back on the surface: the drop was not the hole
 
     def align(self) -> None:
+        """Wiggle alignment (Fig. 3c): each adjustment turns the peg back towards upright about
+        its estimated lower end and superposes one wiggle, each limited in moment: a rotation
+        stops early when the measured moment about the pinch axis reaches the moment limit."""
         robot, cfg = self.robot, self.cfg
         adm = robot.arm.admittance
-        axis = self.tilt_axis
         amp = math.radians(cfg.wiggle_amplitude_deg)
-        # Rotational compliance about the pinch axis during alignment.
-        adm.set_stiffness(np.array([0.0, 0.0, 0.0, *[self.robot.cfg.rot_stiffness] * 3]))
+        # Lateral force control without bias: the hole guides the peg; press down only.
+        robot.arm.absorb_offset()
+        adm.wrench_des[:] = [0.0, 0.0, -cfg.press_force, 0.0, 0.0, 0.0]
+        self._comply(0.0)
         n_wiggle = max(2, int(round(cfg.wiggle_period / robot.dt)))
         start_adjustments = self.adjustments
         while True:
@@ -332,7 +470,7 @@ class AssemblyModule:
                 raise Recovery
             robot.arm.absorb_offset()
             tilt = self._commanded_tilt()
-            moment = float(np.dot(robot.arm.wrench[3:], axis))
+            moment = self._moment()
             # Rotate back towards upright: the commanded tilt, corrected by the measured moment
             # (a contact moment about the pinch axis says the peg bears on one side).
             step = -tilt + cfg.align_gain * moment
@@ -343,10 +481,9 @@ class AssemblyModule:
                 self._rotate_about_tip(sgn * amp, n_wiggle // 4)
             self.adjustments += 1
             z = robot.arm.tcp_pose()[0][2]
-            moment = float(np.dot(robot.arm.wrench[3:], axis))
             # Aligned: the peg slid into the hole (which a tilt much above delta forbids) and
             # the contact moment has relaxed.
-            if z < self.z_three - ENTRY_DEPTH and abs(moment) < ALIGNED_MOMENT:
+            if z < self.z_three - ENTRY_DEPTH and abs(self._moment()) < self.aligned_moment:
                 return
             self._check_timeout("align")
 
@@ -357,16 +494,23 @@ class AssemblyModule:
                           float(-down[2]))
 
     def _rotate_about_tip(self, angle: float, n_ticks: int) -> None:
+        """Turn the reference by ``angle`` about the pinch axis around the estimated lower end
+        (smoothstep profile); stop where the measured moment opposes the turn beyond the
+        moment limit (the rotation would only load the grasp)."""
         robot = self.robot
         p0, R0 = robot.arm.p_ref.copy(), robot.arm.R_ref.copy()
         tip = p0 + self.estimate.hanging * self.estimate.down_sign * R0[:, 0]
         n = max(1, n_ticks)
+        sign = 1.0 if angle >= 0 else -1.0
         for k in range(1, n + 1):
             s = k / n
             s = s * s * (3 - 2 * s)
             Rk = exp_so3(s * angle * self.tilt_axis)
             robot.arm.set_reference(tip + Rk @ (p0 - tip), Rk @ R0)
             robot.tick()
+            self._watch()
+            if -sign * self._moment() > self.moment_limit:
+                return
 
     def insert(self) -> None:
         robot, cfg = self.robot, self.cfg
@@ -374,16 +518,19 @@ class AssemblyModule:
         robot.arm.absorb_offset()
         adm.wrench_des[:] = [0.0, 0.0, -cfg.press_force, 0.0, 0.0, 0.0]
         # Compliance in the lateral axes and in rotation lets the hole guide the peg.
-        adm.set_stiffness(np.array([300.0, 300.0, 0.0, *[self.robot.cfg.rot_stiffness] * 3]))
+        self._comply(cfg.insert_stiffness)
         z_target = self.z_contact - self.cfg.insertion_depth - 0.003
         last_z = robot.arm.tcp_pose()[0][2]
         n_wiggle = max(2, int(round(cfg.wiggle_period / robot.dt)))
         amp = math.radians(cfg.wiggle_amplitude_deg)
         stalls = 0
+        check = max(1, int(round(0.25 / robot.dt)))
         while robot.arm.tcp_pose()[0][2] > z_target:
-            robot.run(0.25)
+            for _ in range(check):
+                robot.tick()
+                self._watch()
             z = robot.arm.tcp_pose()[0][2]
-            if last_z - z < 0.25 * cfg.insert_speed * 0.25:
+            if last_z - z < 0.25 * cfg.insert_speed * 0.25 * check * robot.dt / 0.25:
                 # Stalled (jammed): one more wiggle adjustment; several in a row mean the peg
                 # is not in the hole at all (a wrong contact-state decision).
                 stalls += 1
@@ -396,6 +543,7 @@ class AssemblyModule:
                 stalls = 0
             last_z = z
             self._check_timeout("insert")
+        self._check_grasp()
 
     def release(self) -> None:
         robot = self.robot

@@ -44,8 +44,12 @@ class Admittance:
         self._denom_dt = -1.0
         self.set_stiffness(np.array([cfg.trans_stiffness] * 3 + [cfg.rot_stiffness] * 3))
 
-    def set_stiffness(self, stiffness: np.ndarray) -> None:
-        """Set K per axis (0 = force control on that axis) and derive D from it."""
+    def set_stiffness(self, stiffness: np.ndarray, damping: np.ndarray | None = None) -> None:
+        """Set K per axis (0 = force control on that axis) and derive D from it.
+
+        D is critical on stiff axes and ``ControllerConfig.force_damping`` on force-controlled
+        translation axes; ``damping`` (six values) replaces it where given (NaN: keep).
+        """
         stiffness = np.asarray(stiffness, dtype=float)
         if stiffness.shape != (6,) or np.any(stiffness < 0):
             raise ValueError("stiffness needs six values >= 0")
@@ -56,6 +60,11 @@ class Admittance:
         # minimum above).
         force_axes = (stiffness == 0) & (np.arange(6) < 3)
         self.damping[force_axes] = np.maximum(self.damping[force_axes], self.cfg.force_damping)
+        if damping is not None:
+            damping = np.asarray(damping, dtype=float)
+            if damping.shape != (6,) or np.any(damping <= 0):
+                raise ValueError("damping needs six values > 0 (NaN: keep)")
+            self.damping = np.where(np.isnan(damping), self.damping, damping)
         self._denom_dt = -1.0  # M + D dt must be recomputed
 
     def reset(self) -> None:

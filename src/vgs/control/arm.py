@@ -29,6 +29,7 @@ from vgs.control.transforms import exp_so3, log_so3_tuple
 from vgs.sim.cell import Cell
 from vgs.sim.ft_sensor import FTSensor
 
+GRAVITY = 9.81
 DLS_LAMBDA = 0.01
 IK_ITERATIONS = 2
 # UR5 joint speed limit (datasheet: 180 deg/s on every joint).
@@ -80,6 +81,43 @@ class ArmController:
         self._Rerr = np.zeros((3, 3))
         self.p_ref, self.R_ref = self.tcp_pose()
         self.q_cmd = self.joint_positions()
+        # Gravity compensation of the payload below the sensor (see tare()).
+        self._tool_mass, self._tool_com = tool_inertial(cell)
+        self._p_ft_tcp = self._ft_xmat.T @ (self._tcp_xpos - self._ft_xpos)
+        self.payload_mass = self._tool_mass
+        self.payload_com = self._tool_com.copy()
+        self._g_tare = np.zeros(6)
+        self._g_now = np.zeros(6)
+        self._compensate = False
+
+    def set_payload(self, peg_mass: float) -> None:
+        """Compensate a held peg of ``peg_mass`` as if its centre of mass lay at the TCP (the
+        pads) besides the tool's own load; takes effect at the next :meth:`tare`."""
+        m = self._tool_mass + peg_mass
+        self.payload_com = (self._tool_mass * self._tool_com + peg_mass * self._p_ft_tcp) / m
+        self.payload_mass = m
+
+    def _gravity_wrench(self, out: np.ndarray) -> np.ndarray:
+        """The payload's weight as an external wrench on the tool, sensor frame."""
+        g = self._ft_xmat.T @ np.array([0.0, 0.0, -GRAVITY * self.payload_mass])
+        out[:3] = g
+        out[3:] = np.cross(self.payload_com, g)
+        return out
+
+    def tare(self) -> None:
+        """Zero the F/T sensor here and compensate the payload's weight from now on.
+
+        The sensor reads the external wrench relative to the tare; turning the wrist turns the
+        payload's weight in the sensor frame, so the change of the expected weight wrench
+        ``W_g(R) - W_g(R_tare)`` (tool: its design mass and centre of mass; a held peg: its
+        nominal mass at the pads, :meth:`set_payload`) is removed from every later reading.
+        A peg held off its centre of mass leaves its gravitational moment
+        ``m g c sin(tilt)`` in the signal (paper eq. 2): the controller cannot tell it from a
+        contact moment.
+        """
+        self.ft.tare()
+        self._gravity_wrench(self._g_tare)
+        self._compensate = True
 
     def set_compliant(self, on: bool) -> None:
         """Let the F/T signal drive the admittance (True) or hold the reference stiffly."""
@@ -104,6 +142,9 @@ class ArmController:
     def read_ft(self) -> np.ndarray:
         """Sample the F/T sensor; update and return the world-frame wrench at the TCP."""
         w = self.ft.sample(self._raw)
+        if self._compensate:
+            w -= self._gravity_wrench(self._g_now)
+            w += self._g_tare
         self.wrench_sensor = w
         R_world_ft = self._ft_xmat
         wrench = self.wrench
@@ -174,6 +215,20 @@ class ArmController:
             if max(e) < 1e-7 and min(e) > -1e-7:
                 break
         self._ctrl[:] = q
+
+
+def tool_inertial(cell: Cell) -> tuple[float, np.ndarray]:
+    """Mass and centre of mass (sensor frame) of everything below the F/T sensor's site: the
+    robot's own tool (sensor body, RG2), its design data (the gripper's fingers move
+    symmetrically, so the centre does not depend on the opening)."""
+    m, ids = cell.model, cell.ids
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    body = int(m.site_bodyid[ids.ft_site])
+    mass = float(m.body_subtreemass[body])
+    com_world = d.subtree_com[body]
+    R = d.site_xmat[ids.ft_site].reshape(3, 3)
+    return mass, R.T @ (com_world - d.site_xpos[ids.ft_site])
 
 
 def _block(array: np.ndarray, index: np.ndarray) -> np.ndarray:

@@ -54,6 +54,9 @@ class Robot:
         self.trace = Trace() if trace else None
         self.phase = "idle"
         self._tip_site = None
+        # Called after every control tick: records and tests read the simulator here (ground
+        # truth for analysis); nothing in the controller does.
+        self.observers: list[Callable[[], None]] = []
 
     @property
     def time(self) -> float:
@@ -66,6 +69,8 @@ class Robot:
         self.cell.step(self.decimation)
         if self.trace is not None:
             self._record()
+        for observer in self.observers:
+            observer()
 
     def _record(self) -> None:
         t = self.trace

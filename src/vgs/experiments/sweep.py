@@ -1,12 +1,16 @@
 """Grasp-offset sweep: assemble after grasping at fixed offsets along the peg, in parallel.
 
-For each offset ``o_i`` and trial ``t`` the episode seed comes from
-``numpy.random.SeedSequence([seed, i, t])``; a child of that sequence draws the peg of the trial:
-``length = L0 * U(1 - length_range, 1 + length_range)`` and
+A paired experiment (common random numbers): trial ``t`` is one *scene*, the same at every
+offset. Its episode seed comes from ``numpy.random.SeedSequence([seed, t])`` and a child of that
+sequence draws its peg: ``length = L0 * U(1 - length_range, 1 + length_range)`` and
 ``mass = m0 * (length / L0) * U(1 - mass_range, 1 + mass_range)`` (the mass follows the volume
-when the length changes). The grasp is :func:`vgs.assembly.episode.offset_policy`: it sees only
-the heightmap. Trials run in a ``spawn`` process pool; rows are sorted by trial index, so the
-result does not depend on the number of workers.
+when the length changes). So every offset meets the same peg poses, hole displacements, pegs and
+sensor noise, and offsets are compared scene by scene (:func:`paired_analysis`). The grasp is
+:func:`vgs.assembly.episode.offset_policy`: it sees only the heightmap. Trials run in a
+``spawn`` process pool; rows are sorted by trial index, so the result does not depend on the
+number of workers. Every finished row is appended to ``journal.jsonl`` in the output folder; a
+sweep started again in the same folder checks the journal against its plan and runs only what is
+missing.
 """
 
 from __future__ import annotations
@@ -37,8 +41,10 @@ END_MARGIN = 0.015
 COLUMNS: tuple[str, ...] = (
     "offset_mm", "mass_kg", "length_mm", "success", "assembly_time_s",
     *(f"time_{p}_s" for p in PHASES),
-    "adjustments", "failure_reason", "seed", "grasp_offset_mm",
+    "adjustments", "retries", "failure_reason", "seed", "trial", "grasp_offset_mm",
+    "peg_turn_deg", "peak_grasp_moment_nm", "peak_moment_measured_nm",
 )
+BOOTSTRAP_RESAMPLES = 2000
 
 
 @dataclass(frozen=True)
@@ -129,7 +135,7 @@ def plan(spec: SweepSpec, nominal: PegConfig) -> list[Trial]:
     trials = []
     for i, offset in enumerate(spec.offsets):
         for t in range(spec.trials):
-            seq = np.random.SeedSequence([spec.seed, i, t])
+            seq = np.random.SeedSequence([spec.seed, t])  # the scene: the same at every offset
             seed = int(seq.generate_state(1)[0])
             rng = np.random.default_rng(seq.spawn(1)[0])
             length_factor = rng.uniform(1.0 - spec.length_range, 1.0 + spec.length_range)
@@ -164,15 +170,20 @@ def _run_trial(trial: Trial) -> tuple[int, dict[str, Any]]:
         "assembly_time_s": row["assembly_time"],
         **{f"time_{p}_s": row[f"time_{p}_s"] for p in PHASES},
         "adjustments": row["adjustments"],
+        "retries": row["retries"],
         "failure_reason": row["failure_reason"],
         "seed": trial.seed,
+        "trial": trial.trial,
         "grasp_offset_mm": row["grasp_offset_mm"],
+        "peg_turn_deg": row["peg_turn_deg"],
+        "peak_grasp_moment_nm": row["peak_grasp_moment"],
+        "peak_moment_measured_nm": row["peak_moment_measured"],
     }
     return trial.index, out
 
 
 def run_sweep(cfg: ExperimentConfig, spec: SweepSpec, workers: int | None = None,
-              progress: bool = True) -> list[dict[str, Any]]:
+              progress: bool = True, journal: Path | None = None) -> list[dict[str, Any]]:
     """Run every trial of ``spec`` and return one row per trial, sorted by trial index.
 
     Args:
@@ -180,22 +191,98 @@ def run_sweep(cfg: ExperimentConfig, spec: SweepSpec, workers: int | None = None
         spec: The sweep.
         workers: Worker processes (default ``os.cpu_count()``); 1 runs in this process.
         progress: Show a tqdm bar on stderr.
+        journal: A JSON-lines file: rows found there (checked against the plan) are not run
+            again, and every new row is appended to it as it arrives.
 
     Raises:
         ConfigError: If the sweep or the worker count is invalid.
+        VGSError: If the journal holds a row that the plan does not (another sweep's folder).
     """
     check_spec(spec, cfg.cell)
     workers = (os.cpu_count() or 1) if workers is None else workers
     if workers < 1:
         raise ConfigError("workers", f"must be >= 1, got {workers}")
     trials = plan(spec, cfg.cell.peg)
-    rows: dict[int, dict[str, Any]] = {}
-    bar = tqdm(total=len(trials), desc="sweep", unit="episode", disable=not progress)
-    with bar:
-        for index, row in _results(cfg, trials, min(workers, len(trials))):
-            rows[index] = row
-            bar.update(1)
+    rows = read_journal(journal, trials) if journal is not None else {}
+    todo = [t for t in trials if t.index not in rows]
+    bar = tqdm(total=len(trials), initial=len(rows), desc="sweep", unit="episode",
+               disable=not progress)
+    with bar, _appender(journal) as write:
+        if todo:
+            for index, row in _results(cfg, todo, min(workers, len(todo))):
+                rows[index] = row
+                write({"index": index, **row})
+                bar.update(1)
     return [rows[i] for i in sorted(rows)]
+
+
+def read_journal(path: Path, trials: Sequence[Trial]) -> dict[int, dict[str, Any]]:
+    """Rows of an earlier run of the same sweep, by trial index.
+
+    A torn last line (a run killed while writing) is dropped. A row whose offset, seed or peg
+    differs from the plan's trial of its index means the folder holds another sweep.
+
+    Raises:
+        VGSError: Naming the file and line of a row the plan does not hold.
+    """
+    import json
+
+    rows: dict[int, dict[str, Any]] = {}
+    if not path.exists():
+        return rows
+    lines = path.read_text().splitlines()
+    for n, line in enumerate(lines, start=1):
+        try:
+            doc = json.loads(line)
+        except json.JSONDecodeError:
+            if n == len(lines):
+                break  # torn last line: run it again
+            raise VGSError(f"{path}:{n}: not a sweep row; remove the file to start over") from None
+        index = doc.pop("index", None)
+        if not isinstance(index, int) or not 0 <= index < len(trials):
+            raise VGSError(f"{path}:{n}: a row of another sweep (index {index!r}); use another "
+                           "--out or remove the file")
+        t = trials[index]
+        expected = (round(t.offset * 1000.0, 6), t.seed, round(t.peg.mass, 9),
+                    round(t.peg.length * 1000.0, 6))
+        found = (round(float(doc.get("offset_mm", math.nan)), 6), doc.get("seed"),
+                 round(float(doc.get("mass_kg", math.nan)), 9),
+                 round(float(doc.get("length_mm", math.nan)), 6))
+        if found != expected:
+            raise VGSError(f"{path}:{n}: a row of another sweep (offset, seed or peg differ from "
+                           "this sweep's plan); use another --out or remove the file")
+        rows[index] = {k: (math.nan if doc.get(k) is None and k in _FLOAT_COLUMNS else doc.get(k))
+                       for k in COLUMNS}
+    return rows
+
+
+_FLOAT_COLUMNS = frozenset(c for c in COLUMNS if c.endswith(("_s", "_mm", "_deg", "_nm", "_kg")))
+
+
+class _appender:
+    """Context manager: a function that appends one strict-JSON row to the journal."""
+
+    def __init__(self, path: Path | None) -> None:
+        self.path = path
+        self.fh: Any = None
+
+    def __enter__(self) -> Any:
+        import json
+
+        if self.path is None:
+            return lambda row: None
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.fh = self.path.open("a")
+
+        def write(row: dict[str, Any]) -> None:
+            self.fh.write(json.dumps(json_safe(row), allow_nan=False) + "\n")
+            self.fh.flush()
+
+        return write
+
+    def __exit__(self, *exc: object) -> None:
+        if self.fh is not None:
+            self.fh.close()
 
 
 def _results(cfg: ExperimentConfig, trials: list[Trial],
@@ -230,8 +317,9 @@ def sweep_to_folder(cfg: ExperimentConfig, spec: SweepSpec, out: Path,
 
     from vgs.experiments.plots import sweep_figure
 
-    rows = run_sweep(cfg, spec, workers=workers, progress=progress)
     out.mkdir(parents=True, exist_ok=True)
+    rows = run_sweep(cfg, spec, workers=workers, progress=progress,
+                     journal=out / "journal.jsonl")
     write_csv(rows, out / "sweep.csv")
     ranges = (f"mass +-{100 * spec.mass_range:g} %, length +-{100 * spec.length_range:g} %"
               if spec.mass_range or spec.length_range else "nominal peg")
@@ -240,7 +328,7 @@ def sweep_to_folder(cfg: ExperimentConfig, spec: SweepSpec, out: Path,
     summary = summarize(rows)
     doc = {"profile": cfg.name, "seed": spec.seed, "trials": spec.trials,
            "mass_range": spec.mass_range, "length_range": spec.length_range,
-           "offsets": summary}
+           "offsets": summary, "paired": paired_analysis(rows)}
     (out / "summary.json").write_text(json.dumps(json_safe(doc), indent=2) + "\n")
     return summary
 
@@ -265,8 +353,119 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
             "time_min_s": _stat(times, np.min),
             "time_max_s": _stat(times, np.max),
             "adjustments_mean": float(np.mean([r["adjustments"] for r in group])),
+            "retry_rate": float(np.mean([r.get("retries", 0) > 0 for r in group])),
+            "peg_lost": sum(r["failure_reason"] == "peg_lost" for r in group),
+            "time_align_mean_s": _stat(np.array([r["time_align_s"] for r in group
+                                                 if r["success"]], dtype=float), np.mean),
         })
     return out
+
+
+def _bootstrap_ci(stat: Any, scenes: np.ndarray, resamples: int,
+                  rng: np.random.Generator) -> tuple[float, float]:
+    """95 % percentile interval of ``stat(scene_sample)`` over scenes drawn with replacement."""
+    values = [stat(rng.choice(scenes, size=scenes.size, replace=True)) for _ in range(resamples)]
+    values = np.array([v for v in values if math.isfinite(v)])
+    if values.size < resamples // 2:
+        return math.nan, math.nan
+    return float(np.percentile(values, 2.5)), float(np.percentile(values, 97.5))
+
+
+def paired_analysis(rows: Sequence[dict[str, Any]], resamples: int = BOOTSTRAP_RESAMPLES,
+                    seed: int = 0) -> dict[str, Any]:
+    """Scene-by-scene comparisons of a paired sweep (every offset on the same scenes).
+
+    - ``vs_center``: per offset, the mean over scenes where both succeeded of
+      ``T(offset) - T(0)`` (total and alignment time), with a 95 % bootstrap interval over
+      scenes; needs the offset 0 in the sweep.
+    - ``slope``: least-squares slope of the assembly time (and of the alignment time) against
+      |offset| over the successful rows, s per mm, with a 95 % interval from resampling whole
+      scenes (all offsets of a drawn scene together).
+    - ``symmetry``: per |offset| > 0, success and mean time at +c and -c, each with its 95 %
+      interval (Wilson for success, bootstrap over scenes for the time).
+
+    Args:
+        rows: Sweep rows with a ``trial`` column (the scene).
+        resamples: Bootstrap resamples.
+        seed: Seed of the resampling.
+    """
+    rng = np.random.default_rng(seed)
+    offsets = sorted({round(float(r["offset_mm"]), 6) for r in rows})
+    table: dict[tuple[int, float], dict[str, Any]] = {
+        (int(r["trial"]), round(float(r["offset_mm"]), 6)): r for r in rows}
+    scenes = np.array(sorted({int(r["trial"]) for r in rows}))
+    out: dict[str, Any] = {"scenes": int(scenes.size), "vs_center": [], "slope": {},
+                           "symmetry": []}
+
+    def ok_time(t: int, o: float, key: str) -> float:
+        r = table.get((t, o))
+        return float(r[key]) if r is not None and r["success"] else math.nan
+
+    if 0.0 in offsets:
+        for o in offsets:
+            if o == 0.0:
+                continue
+            entry: dict[str, Any] = {"offset_mm": o}
+            for key, name in (("assembly_time_s", "time"), ("time_align_s", "align")):
+                diff = np.array([ok_time(t, o, key) - ok_time(t, 0.0, key) for t in scenes])
+                lookup = dict(zip(scenes.tolist(), diff.tolist(), strict=True))
+
+                def mean_diff(sample: np.ndarray, lookup: dict[int, float] = lookup) -> float:
+                    v = np.array([lookup[int(t)] for t in sample])
+                    v = v[np.isfinite(v)]
+                    return float(v.mean()) if v.size else math.nan
+
+                lo, hi = _bootstrap_ci(mean_diff, scenes, resamples, rng)
+                entry[f"{name}_diff_s"] = mean_diff(scenes)
+                entry[f"{name}_diff_ci_s"] = [lo, hi]
+                entry["pairs"] = int(np.isfinite(diff).sum())
+            out["vs_center"].append(entry)
+    for key, name in (("assembly_time_s", "time"), ("time_align_s", "align")):
+        def slope(sample: np.ndarray, key: str = key) -> float:
+            x, y = [], []
+            for t in sample:
+                for o in offsets:
+                    v = ok_time(int(t), o, key)
+                    if math.isfinite(v):
+                        x.append(abs(o))
+                        y.append(v)
+            if len(set(x)) < 2:
+                return math.nan
+            return float(np.polyfit(np.array(x), np.array(y), 1)[0])
+
+        lo, hi = _bootstrap_ci(slope, scenes, resamples, rng)
+        out["slope"][f"{name}_s_per_mm"] = slope(scenes)
+        out["slope"][f"{name}_ci_s_per_mm"] = [lo, hi]
+    for o in offsets:
+        if o <= 0.0 or -o not in offsets:
+            continue
+        entry = {"abs_offset_mm": o}
+        for side, v in (("plus", o), ("minus", -o)):
+            group = [table[(int(t), v)] for t in scenes if (int(t), v) in table]
+            k, n = sum(bool(r["success"]) for r in group), len(group)
+            entry[f"{side}_success"] = [k, n]
+            entry[f"{side}_success_ci"] = list(wilson_interval(k, n))
+
+            def mean_time(sample: np.ndarray, v: float = v) -> float:
+                vals = np.array([ok_time(int(t), v, "assembly_time_s") for t in sample])
+                vals = vals[np.isfinite(vals)]
+                return float(vals.mean()) if vals.size else math.nan
+
+            entry[f"{side}_time_s"] = mean_time(scenes)
+            entry[f"{side}_time_ci_s"] = list(_bootstrap_ci(mean_time, scenes, resamples, rng))
+        out["symmetry"].append(entry)
+    return out
+
+
+def wilson_interval(k: int, n: int, z: float = 1.96) -> tuple[float, float]:
+    """Wilson score 95 % interval of a success rate k / n."""
+    if n == 0:
+        return math.nan, math.nan
+    p = k / n
+    denom = 1 + z * z / n
+    centre = (p + z * z / (2 * n)) / denom
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
+    return max(0.0, centre - half), min(1.0, centre + half)
 
 
 def disturbing_moments(cfg: ExperimentConfig, lever: np.ndarray,
