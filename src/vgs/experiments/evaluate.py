@@ -25,16 +25,26 @@ with it, the pool is rebuilt and the episode is tried again, up to :data:`MAX_AT
 (then ``failure_reason = "worker_lost"``).
 
 Resume: every finished row is appended to ``journal.jsonl`` at once; started again with the same
-``--out`` the run skips the episodes already there. At the end ``episodes.parquet``,
-``episodes.csv`` and ``summary.json`` are written.
+``--out`` the run compares the request with ``meta.json`` (policy, condition, seed,
+configuration; only a larger number of episodes is accepted), checks every journal row against
+the planned episode of its index (episode seed, peg mass and length), and skips the episodes
+already there. A line cut short by a kill (the last one, without its newline) is dropped and its
+episode runs again; a duplicate, a row of another plan or an unreadable line is refused, naming
+the file and line. The folder is locked while the run works; ``meta.json`` is written
+atomically. At the end ``episodes.parquet``, ``episodes.csv`` and ``summary.json`` are written.
+
+Each row records the CPU model and the MuJoCo version of the host that ran it
+(``host_cpu``, ``mujoco_version``): the same scene can end differently on another CPU.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import multiprocessing as mp
 import os
+import signal
 import sys
 import time
 from collections.abc import Callable, Generator, Iterator
@@ -50,9 +60,11 @@ from tqdm import tqdm
 
 from vgs.assembly.episode import EpisodeRunner
 from vgs.assembly.record import EpisodeRecord
-from vgs.config import ExperimentConfig, PegConfig, same_config, to_dict
-from vgs.errors import ConfigError, VGSError
+from vgs.config import ExperimentConfig, PegConfig, to_dict
+from vgs.errors import ConfigError, CorruptFileError, RunMismatchError, VGSError
 from vgs.experiments.policies import EvalPolicy, is_run_dir, load_policy, policy_label
+from vgs.runfolder import check_request, host, locked, read_json, write_json
+from vgs.validate import check_config, check_seed
 
 CONDITIONS = ("nominal", "mass", "length")
 BACKENDS = ("local", "ray")
@@ -79,8 +91,10 @@ class EvalSpec:
     def __post_init__(self) -> None:
         if self.condition not in CONDITIONS:
             raise ConfigError("condition", f"must be one of {CONDITIONS}, got {self.condition!r}")
-        if self.episodes < 1:
-            raise ConfigError("episodes", f"must be >= 1, got {self.episodes}")
+        if isinstance(self.episodes, bool) or not isinstance(self.episodes, int) \
+                or self.episodes < 1:
+            raise ConfigError("episodes", f"must be an integer >= 1, got {self.episodes!r}")
+        check_seed("seed", self.seed)
 
 
 @dataclass(frozen=True)
@@ -181,6 +195,8 @@ _WORKER: EpisodeWorker | None = None
 
 def _init_process(cfg: ExperimentConfig) -> None:
     global _WORKER
+    # Ctrl-C reaches the whole process group: the parent handles it (and stops the pool).
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     _WORKER = EpisodeWorker(cfg)
 
 
@@ -199,7 +215,7 @@ def _row(task: EpisodeTask, record: EpisodeRecord, decision: dict[str, Any],
     return {"job": task.job, "index": task.index, **record.to_row(),
             "rotation": decision.get("rotation", -1), "row": decision.get("row", -1),
             "col": decision.get("col", -1), "q_value": decision.get("q_value", math.nan),
-            "wall_s": wall}
+            "wall_s": wall, **host()}
 
 
 def _lost_row(task: EpisodeTask) -> dict[str, Any]:
@@ -314,16 +330,87 @@ def run_ray(cfg: ExperimentConfig, tasks: list[EpisodeTask], workers: int,
 # -- the evaluation run --------------------------------------------------------------------------
 
 
-def _read_journal(path: Path) -> dict[int, dict[str, Any]]:
+ROW_KEYS = ("index", "seed", "peg_mass", "peg_length", "success", "grasp_success",
+            "assembly_time", "failure_reason")
+
+
+def read_journal(path: Path, plan: list[EpisodeTask] | None = None
+                 ) -> tuple[dict[int, dict[str, Any]], bool]:
+    """The rows of a ``journal.jsonl`` by episode index, checked; and whether a cut last line
+    was dropped.
+
+    Args:
+        path: The journal.
+        plan: The planned episodes; each row must match the episode of its index (episode seed,
+            peg mass and length). None checks the rows' form only (``vgs status``).
+
+    Raises:
+        CorruptFileError: Naming the file and line of a line that is not UTF-8, not JSON (but
+            for the last line when a kill cut it short), not an episode row, a duplicate, or a
+            row of another plan.
+    """
     rows: dict[int, dict[str, Any]] = {}
-    if path.exists():
-        for line in path.read_text().splitlines():
-            try:
-                row = json.loads(line)
-            except json.JSONDecodeError:  # a line cut short by a kill
+    cut = False
+    if not path.exists():
+        return rows, cut
+    data = path.read_bytes()
+    lines = data.split(b"\n")
+    first: dict[int, int] = {}
+    for number, raw in enumerate(lines, start=1):
+        last = number == len(lines)
+        if not raw.strip():
+            if last:
                 continue
-            rows[int(row["index"])] = row
-    return rows
+            raise CorruptFileError(path, "is an empty line, not an episode row", line=number)
+        try:
+            text = raw.decode("utf-8")
+        except UnicodeDecodeError:
+            raise CorruptFileError(path, "is not UTF-8 text; restore the journal or use a new "
+                                         "folder", line=number) from None
+        try:
+            row = json.loads(text)
+        except json.JSONDecodeError:
+            if last:  # a line cut short by a kill: its episode runs again
+                cut = True
+                continue
+            raise CorruptFileError(path, "is not a JSON line; restore the journal or use a new "
+                                         "folder", line=number) from None
+        if not isinstance(row, dict) or any(k not in row for k in ROW_KEYS) \
+                or isinstance(row["index"], bool) or not isinstance(row["index"], int):
+            raise CorruptFileError(path, "is not an episode row of an evaluation", line=number)
+        i = row["index"]
+        if i in first:
+            raise CorruptFileError(path, f"repeats episode {i} (first at line {first[i]}); "
+                                         "restore the journal or use a new folder", line=number)
+        if plan is not None:
+            _check_row(path, number, row, plan)
+        first[i] = number
+        rows[i] = row
+    return rows, cut
+
+
+def _check_row(path: Path, number: int, row: dict[str, Any], plan: list[EpisodeTask]) -> None:
+    i = row["index"]
+    if not 0 <= i < len(plan):
+        raise CorruptFileError(path, f"holds episode {i}, outside the {len(plan)} planned "
+                                     "episodes: another evaluation's row", line=number)
+    task = plan[i]
+
+    def same(a: Any, b: float) -> bool:
+        return isinstance(a, (int, float)) and not isinstance(a, bool) and math.isclose(
+            float(a), b, rel_tol=1e-9, abs_tol=1e-12)
+
+    problems = []
+    if row["seed"] != task.seed:
+        problems.append(f"seed {row['seed']} (planned {task.seed})")
+    if not same(row["peg_mass"], task.peg.mass):
+        problems.append(f"peg mass {row['peg_mass']} kg (planned {task.peg.mass:.6g})")
+    if not same(row["peg_length"], task.peg.length):
+        problems.append(f"peg length {row['peg_length']} m (planned {task.peg.length:.6g})")
+    if problems:
+        raise CorruptFileError(path, f"episode {i} is not this evaluation's ({', '.join(problems)}"
+                                     "): rows of another condition, seed or configuration; use "
+                                     "a new folder", line=number)
 
 
 def summarize(df: pd.DataFrame) -> dict[str, Any]:
@@ -359,31 +446,38 @@ def summarize(df: pd.DataFrame) -> dict[str, Any]:
 
 
 def _prepare(cfg: ExperimentConfig, spec: EvalSpec, out: Path) -> dict[int, dict[str, Any]]:
-    """Check and write ``out/meta.json``; return the rows already in the journal."""
+    """Check the request against ``out/meta.json`` (or write it) and the journal against the
+    plan; return the rows already in the journal. Call with ``out`` locked."""
     policy = load_policy(spec.policy, cfg)  # fail here, not in every worker, on a bad spec
-    out.mkdir(parents=True, exist_ok=True)
     meta = {"policy": policy_label(spec.policy), "policy_source": spec.policy,
             "policy_trained_episodes": getattr(policy, "trained_episodes", None),
             "condition": spec.condition, "episodes": spec.episodes, "seed": spec.seed,
             "config": to_dict(cfg)}
     meta_path = out / "meta.json"
     if meta_path.exists():
-        old = json.loads(meta_path.read_text())
+        old = read_json(meta_path)
         # A training run that trained on since the rows were written is another policy.
         keys = ["policy_source", "condition", "seed"]
         if "policy_trained_episodes" in old:  # (not recorded before 2026-11-22)
             keys.append("policy_trained_episodes")
-        changed = [k for k in keys if json.dumps(old.get(k)) != json.dumps(meta[k])]
-        if not same_config(old.get("config"), cfg):
-            changed.append("config")
-        if changed:
-            raise ConfigError("out", f"{out} holds another evaluation (differs in {changed}); "
-                                     "use a new folder")
-    meta_path.write_text(json.dumps(meta, indent=2))
+        for key in keys:
+            if json.dumps(old.get(key)) != json.dumps(meta[key]):
+                raise RunMismatchError(key, f"{out} holds another evaluation ({old.get(key)!r}, "
+                                            f"not {meta[key]!r}); use a new folder")
+        if not isinstance(old.get("config"), dict):
+            raise CorruptFileError(meta_path, "records no configuration")
+        check_request(old["config"], cfg, meta_path, extendable=("eval.episodes",))
+        recorded = old.get("episodes")
+        if isinstance(recorded, int) and spec.episodes < recorded:
+            raise RunMismatchError("episodes", f"{out} holds an evaluation of {recorded} "
+                                               f"episodes, not {spec.episodes}; ask for "
+                                               f"{recorded} or more (more extends it), or use a "
+                                               "new folder")
     journal = out / "journal.jsonl"
-    rows = _read_journal(journal)
-    if journal.exists():  # drop a line torn by a kill, so that appending starts on a new line
-        tmp = journal.with_suffix(".tmp")
+    rows, cut = read_journal(journal, plan_episodes(cfg, spec))
+    write_json(meta_path, meta)
+    if cut:  # drop the line torn by a kill, so that appending starts on a new line
+        tmp = journal.with_name(f".{journal.name}.tmp")
         tmp.write_text("".join(json.dumps(rows[i]) + "\n" for i in sorted(rows)))
         os.replace(tmp, journal)
     return rows
@@ -395,10 +489,14 @@ def _finish(spec: EvalSpec, out: Path, rows: dict[int, dict[str, Any]]) -> pd.Da
     df.insert(1, "policy", label)
     df.insert(2, "condition", spec.condition)
     df.insert(3, "root_seed", spec.seed)
-    df.to_parquet(out / "episodes.parquet", index=False)
-    df.to_csv(out / "episodes.csv", index=False)
-    (out / "summary.json").write_text(json.dumps(
-        {"policy": label, "condition": spec.condition, **summarize(df)}, indent=2))
+    # Each file is written whole and renamed into place; summary.json, which marks the
+    # evaluation finished, comes last.
+    for name, write in (("episodes.parquet", df.to_parquet), ("episodes.csv", df.to_csv)):
+        tmp = out / f".{name}.tmp"
+        write(tmp, index=False)
+        os.replace(tmp, out / name)
+    write_json(out / "summary.json", {"policy": label, "condition": spec.condition,
+                                      **summarize(df)})
     return df
 
 
@@ -414,13 +512,31 @@ def evaluate_many(cfg: ExperimentConfig, jobs: list[tuple[EvalSpec, Path]],
         One table per job, rows in index order.
 
     Raises:
-        ConfigError: On a bad backend, worker count or policy, or a folder of another run.
+        ConfigError: On a bad backend, worker count, configuration or policy (checked before
+            anything is written).
+        RunMismatchError: If a folder holds another evaluation.
+        CorruptFileError: If a folder's ``meta.json`` or journal cannot be read or holds rows
+            of another plan.
+        FolderBusyError: If another process is working in one of the folders.
     """
     if backend not in BACKENDS:
         raise ConfigError("backend", f"must be one of {BACKENDS}, got {backend!r}")
     workers = (os.cpu_count() or 1) if workers is None else workers
-    if workers < 1:
-        raise ConfigError("workers", f"must be >= 1, got {workers}")
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ConfigError("workers", f"must be an integer >= 1, got {workers!r}")
+    cfg = check_config(cfg)  # before anything is written
+    for _, out in jobs:
+        if out.exists() and not out.is_dir():
+            raise ConfigError("out", f"{out} is a file, not a folder")
+    with contextlib.ExitStack() as stack:
+        for _, out in jobs:
+            stack.enter_context(locked(out))
+        return _evaluate_locked(cfg, jobs, workers, backend, ray_address, progress)
+
+
+def _evaluate_locked(cfg: ExperimentConfig, jobs: list[tuple[EvalSpec, Path]], workers: int,
+                     backend: str, ray_address: str | None,
+                     progress: bool) -> list[pd.DataFrame]:
     done = [_prepare(cfg, spec, out) for spec, out in jobs]
     tasks = [replace(t, job=j) for j, (spec, _) in enumerate(jobs)
              for t in plan_episodes(cfg, spec) if t.index not in done[j]]
