@@ -24,6 +24,9 @@ class ConfigError(VGSError, ValueError):
         self.message = message
         super().__init__(f"{field}: {message}")
 
+    def __reduce__(self) -> tuple[type, tuple[str, str]]:  # survives a process pool
+        return type(self), (self.field, self.message)
+
 
 class SimulationError(VGSError, RuntimeError):
     """The physics became unstable (NaN, runaway penetration)."""
@@ -44,6 +47,9 @@ class CorruptFileError(VGSError):
         self.message = message
         where = self.path if line is None else f"{self.path}:{line}"
         super().__init__(f"{where}: {message}")
+
+    def __reduce__(self) -> tuple[type, tuple[str, str, int | None]]:
+        return type(self), (self.path, self.message, self.line)
 
 
 class CheckpointError(CorruptFileError):

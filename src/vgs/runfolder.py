@@ -99,6 +99,10 @@ def check_request(saved: dict[str, Any], cfg: Any, where: Path,
         raise CorruptFileError(where, f"records a configuration this vgs cannot read ({exc})") \
             from None
     old, new = to_dict(saved_cfg), to_dict(cfg)
+    unknown = _unknown(saved, old)
+    if unknown:
+        raise RunMismatchError(unknown, f"{where} records a field this vgs does not know "
+                                        "(written by another version); use a new folder")
     grown = []
     for path in config_differences(old, new):
         if path in extendable:
@@ -106,12 +110,25 @@ def check_request(saved: dict[str, Any], cfg: Any, where: Path,
             if isinstance(a, int) and isinstance(b, int) and b > a:
                 grown.append(path)
                 continue
-            raise RunMismatchError(path, f"{where} was made with {a!r}, not {b!r}; it can only "
-                                         "grow (to extend the run); use a new folder otherwise")
-        raise RunMismatchError(path, f"{where} was made with {_get(old, path)!r}, not "
-                                     f"{_get(new, path)!r}; repeat the run's settings to resume "
-                                     "it, or use a new folder")
+            raise RunMismatchError(path, f"{where} was made with another configuration ({a!r}, "
+                                         f"not {b!r}); this field can only grow (to extend the "
+                                         "run); use a new folder otherwise")
+        raise RunMismatchError(path, f"{where} was made with another configuration "
+                                     f"({_get(old, path)!r}, not {_get(new, path)!r}); repeat "
+                                     "the run's settings to resume it, or use a new folder")
     return grown
+
+
+def _unknown(saved: dict[str, Any], known: dict[str, Any], prefix: str = "") -> str | None:
+    """The first dotted path in ``saved`` that ``known`` lacks, or None."""
+    for key, value in saved.items():
+        if key not in known:
+            return f"{prefix}{key}"
+        if isinstance(value, dict) and isinstance(known[key], dict):
+            found = _unknown(value, known[key], f"{prefix}{key}.")
+            if found:
+                return found
+    return None
 
 
 def _get(d: dict[str, Any], path: str) -> Any:

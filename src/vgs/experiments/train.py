@@ -182,6 +182,9 @@ _COLLECTOR_RUNNER: EpisodeRunner | None = None
 
 def _init_collector(cfg: ExperimentConfig) -> None:
     global _COLLECTOR_RUNNER
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     torch.set_num_threads(1)
     _COLLECTOR_RUNNER = EpisodeRunner(cfg)
 
