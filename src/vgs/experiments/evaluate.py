@@ -62,7 +62,7 @@ from vgs.assembly.episode import EpisodeRunner
 from vgs.assembly.record import EpisodeRecord
 from vgs.config import ExperimentConfig, PegConfig, to_dict
 from vgs.errors import ConfigError, CorruptFileError, RunMismatchError, VGSError
-from vgs.experiments.journal import read_journal
+from vgs.experiments.journal import encode_row, read_journal
 from vgs.experiments.policies import EvalPolicy, is_run_dir, load_policy, policy_label
 from vgs.runfolder import check_request, host, locked, read_json, write_json
 from vgs.validate import check_config, check_seed
@@ -396,7 +396,7 @@ def _prepare(cfg: ExperimentConfig, spec: EvalSpec, out: Path) -> dict[int, dict
     write_json(meta_path, meta)
     if cut:  # drop the line torn by a kill, so that appending starts on a new line
         tmp = journal.with_name(f".{journal.name}.tmp")
-        tmp.write_text("".join(json.dumps(rows[i]) + "\n" for i in sorted(rows)))
+        tmp.write_text("".join(encode_row(rows[i]) for i in sorted(rows)))
         os.replace(tmp, journal)
     return rows
 
@@ -475,7 +475,7 @@ def _evaluate_locked(cfg: ExperimentConfig, jobs: list[tuple[EvalSpec, Path]], w
                 for row in source:
                     job = int(row["job"])
                     done[job][int(row["index"])] = row
-                    journals[job].write(json.dumps(row) + "\n")
+                    journals[job].write(encode_row(row))
                     journals[job].flush()
                     bar.update(1)
                     finished, ok = finished + 1, ok + int(bool(row["success"]))

@@ -1,21 +1,33 @@
 """An evaluation's ``journal.jsonl``: one JSON row per finished episode, appended as it ends.
 
+Each line carries ``crc32``, the CRC-32 of the row's JSON without it (:func:`encode_row`), so a
+row changed after it was written is caught; rows of journals written before it existed have
+none and are taken as they are.
+
 Read back with checks (torch-, pandas- and MuJoCo-free, so ``vgs status`` stays quick): every
-line must be UTF-8 JSON holding an episode row; no index may come twice; with the plan given,
-each row must be the planned episode of its index (episode seed, peg mass and length). The one
-exception is the last line when a kill cut it short (no JSON): it is dropped and its episode
-runs again.
+line must be UTF-8 JSON holding an episode row whose checksum matches; no index may come twice;
+with the plan given, each row must be the planned episode of its index (episode seed, peg mass
+and length). The one exception is the last line when a kill cut it short (no JSON): it is
+dropped and its episode runs again.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import zlib
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from vgs.errors import CorruptFileError
+
+
+def encode_row(row: dict[str, Any]) -> str:
+    """One journal line (with its newline): the row's JSON plus its ``crc32``."""
+    body = json.dumps(row)
+    return f"{body[:-1]}, \"crc32\": {zlib.crc32(body.encode())}}}\n"
+
 
 ROW_KEYS = ("index", "seed", "peg_mass", "peg_length", "success", "grasp_success",
             "assembly_time", "failure_reason")
@@ -64,6 +76,12 @@ def read_journal(path: Path, plan: Sequence[Any] | None = None
                 continue
             raise CorruptFileError(path, "is not a JSON line; restore the journal or use a new "
                                          "folder", line=number) from None
+        if isinstance(row, dict) and "crc32" in row:
+            crc = row.pop("crc32")
+            if crc != zlib.crc32(json.dumps(row).encode()):
+                raise CorruptFileError(path, "was changed after it was written (its checksum "
+                                             "does not match); restore the journal or use a new "
+                                             "folder", line=number)
         if not isinstance(row, dict) or any(k not in row for k in required) \
                 or isinstance(row["index"], bool) or not isinstance(row["index"], int):
             raise CorruptFileError(path, "is not an episode row of an evaluation", line=number)

@@ -114,41 +114,48 @@ class TrainState:
     threshold: float | None = None
     exploration_times: list[float] | None = None
     rng_state: dict[str, Any] | None = None
+    table_sha256: str | None = None
 
 
-def read_rows(path: Path, cfg: ExperimentConfig, mode: str, keep: int) -> list[dict[str, str]]:
-    """The rows of ``episodes.csv`` before episode ``keep`` (the checkpoint's), checked.
+def read_rows(path: Path, cfg: ExperimentConfig, mode: str, keep: int,
+              digest: str | None = None) -> list[str]:
+    """The header and the rows of ``episodes.csv`` before episode ``keep`` (the checkpoint's),
+    checked, as the lines of the file.
 
     Each kept row must be episode 0, 1, ... in order, of this mode and with the episode's
-    planned seed. Rows from ``keep`` on were written after the checkpoint and are dropped (a
-    line cut short by a kill is among them).
+    planned seed, and the kept lines must hash to ``digest`` (SHA-256 recorded by the
+    checkpoint), so a row changed after its checkpoint is caught. Rows from ``keep`` on were
+    written after the checkpoint and are dropped (a line cut short by a kill is among them).
 
     Raises:
         CorruptFileError: Naming the file and line of an unreadable or foreign row, or when
-            fewer rows than the checkpoint's episode count are left.
+            fewer rows than the checkpoint's episode count are left or they were changed.
     """
+    header = ",".join(CSV_COLUMNS) + "\r\n"
     if not path.exists():
         if keep:
             raise CorruptFileError(path, f"is missing but the checkpoint is at episode {keep}; "
                                          "restore it or train again into a new folder")
-        return []
+        return [header]
+    data = path.read_bytes()
     try:
-        text = path.read_bytes().decode("utf-8")
+        text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
-        line = path.read_bytes()[:exc.start].count(b"\n") + 1
+        line = data[:exc.start].count(b"\n") + 1
         raise CorruptFileError(path, "is not UTF-8 text", line=line) from None
-    lines = text.splitlines()
+    lines = text.splitlines(keepends=True)
     if not lines:
         if keep:
             raise CorruptFileError(path, f"is empty but the checkpoint is at episode {keep}")
-        return []
-    if tuple(lines[0].split(",")) != CSV_COLUMNS:
-        raise CorruptFileError(path, "header is not vgs's training table header", line=1)
-    rows: list[dict[str, str]] = []
-    for number, record in enumerate(csv.DictReader(lines[:keep + 1]), start=2):
-        if None in record or any(v is None for v in record.values()):
+        return [header]
+    if lines[0].rstrip("\r\n") != header.rstrip("\r\n"):
+        raise CorruptFileError(path, "is not vgs's training table header", line=1)
+    for number, line in enumerate(lines[1:keep + 1], start=2):
+        want = number - 2
+        fields = next(csv.reader([line]), [])
+        if len(fields) != len(CSV_COLUMNS) or not line.endswith("\n"):
             raise CorruptFileError(path, "is not a row of this table", line=number)
-        want = len(rows)
+        record = dict(zip(CSV_COLUMNS, fields, strict=True))
         try:
             episode, seed = int(record["episode"]), int(record["seed"])
         except ValueError:
@@ -158,22 +165,30 @@ def read_rows(path: Path, cfg: ExperimentConfig, mode: str, keep: int) -> list[d
                                          f"{record['episode']}, seed {record['seed']}, mode "
                                          f"{record['mode']}); restore the file or train again "
                                          "into a new folder", line=number)
-        rows.append(record)
-    if len(rows) < keep:
-        raise CorruptFileError(path, f"holds {len(rows)} rows but the checkpoint is at episode "
-                                     f"{keep}; restore it or train again into a new folder")
-    return rows
+    kept = lines[:keep + 1]
+    if len(kept) - 1 < keep:
+        raise CorruptFileError(path, f"holds {len(kept) - 1} rows but the checkpoint is at "
+                                     f"episode {keep}; restore it or train again into a new "
+                                     "folder")
+    if digest is not None and _sha256("".join(kept).encode("utf-8")) != digest:
+        raise CorruptFileError(path, f"rows 0-{keep - 1} differ from those the checkpoint saw; "
+                                     "restore the file or train again into a new folder")
+    return kept
 
 
-def _open_csv(path: Path, rows: list[dict[str, str]]) -> Any:
-    """Append-only per-episode table, rewritten (atomically) with the checked ``rows`` first."""
+def _sha256(data: bytes) -> str:
+    import hashlib
+
+    return hashlib.sha256(data).hexdigest()
+
+
+def _open_csv(path: Path, lines: list[str]) -> Any:
+    """Append-only per-episode table, rewritten (atomically) with the checked ``lines`` first."""
     tmp = path.with_name(f".{path.name}.tmp")
-    with tmp.open("w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=CSV_COLUMNS)
-        writer.writeheader()
-        writer.writerows(rows)
+    with tmp.open("w", newline="", encoding="utf-8") as f:
+        f.write("".join(lines))
     os.replace(tmp, path)
-    f = path.open("a", newline="")
+    f = path.open("a", newline="", encoding="utf-8")
     return f, csv.DictWriter(f, fieldnames=CSV_COLUMNS)
 
 
@@ -210,7 +225,8 @@ def save_checkpoint(path: Path, agent: GraspAgent, replay: ReplayBuffer, state: 
                "torch_rng": torch.get_rng_state()}
     meta = {"episode": state.episode, "threshold": state.threshold,
             "exploration_times": state.exploration_times, "rng_state": state.rng_state,
-            "monitor": monitor.state_dict(), "agent": agent_state, "replay": replay_state}
+            "monitor": monitor.state_dict(), "agent": agent_state, "replay": replay_state,
+            "table_sha256": state.table_sha256}
     checkpoint.save(path, tensors, meta)
 
 
@@ -235,7 +251,7 @@ def load_checkpoint(path: Path, agent: GraspAgent, replay: ReplayBuffer | None =
             monitor.load_state_dict(meta["monitor"])
             torch.set_rng_state(tensors["torch_rng"].cpu())
         return TrainState(int(meta["episode"]), meta["threshold"], meta["exploration_times"],
-                          meta["rng_state"])
+                          meta["rng_state"], meta.get("table_sha256"))
     except ConfigError as exc:
         raise CheckpointError(path, f"does not fit this run ({exc})") from None
     except (KeyError, TypeError, ValueError, AttributeError, RuntimeError) as exc:
@@ -323,7 +339,7 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
                                          f"{total}")
     if cfg.reward.threshold_s is not None:
         state.threshold = cfg.reward.threshold_s
-    rows = read_rows(out / "episodes.csv", cfg, mode, state.episode)
+    rows = read_rows(out / "episodes.csv", cfg, mode, state.episode, state.table_sha256)
 
     from torch.utils.tensorboard import SummaryWriter
 
@@ -444,6 +460,7 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
             state.episode = episode + 1
             if state.episode % cfg.train.checkpoint_every == 0 or state.episode == total:
                 state.rng_state = rng.bit_generator.state
+                state.table_sha256 = _sha256((out / "episodes.csv").read_bytes())
                 save_checkpoint(ckpt, agent, replay, state, monitor)
                 if not progress:  # a line per checkpoint for logs of unattended runs
                     print(f"train {mode} {out}: checkpoint at episode {state.episode}/{total}; "
@@ -457,6 +474,11 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
         writer.close()
         if collector is not None:
             collector.shutdown(cancel_futures=True)
+    if cfg.reward.threshold_s is None and state.episode >= cfg.agent.random_episodes:
+        # (the same content as written when the threshold froze: restores a damaged copy)
+        write_json(out / "threshold.json",
+                   {"threshold_s": state.threshold, "n_times": len(state.exploration_times),
+                    "percentile": cfg.reward.threshold_percentile})
     write_json(out / "convergence.json",
                {"delta_q_threshold": cfg.agent.delta_q_threshold,
                 "window": cfg.agent.delta_q_window, "converged": bool(monitor.converged),
