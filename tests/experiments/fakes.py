@@ -31,9 +31,11 @@ def tiny_config(train_episodes: int = 6, eval_episodes: int = 8) -> ExperimentCo
     return cfg
 
 
+# The command-line flags giving tiny_config() (defaults).
 CLI_FLAGS = ["--profile", "smoke", "--set", f"cell.camera.size={SIZE}", "--set",
              "cell.camera.pixel_size=0.007", "--set", "train.checkpoint_every=2", "--set",
-             "agent.random_episodes=2", "--no-progress"]
+             "agent.random_episodes=2", "--set", "train.episodes=6", "--set", "eval.episodes=8",
+             "--no-progress"]
 
 
 class FakeRunner:
