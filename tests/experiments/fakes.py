@@ -32,10 +32,10 @@ def tiny_config(train_episodes: int = 6, eval_episodes: int = 8) -> ExperimentCo
 
 
 # The command-line flags giving tiny_config() (defaults).
-CLI_FLAGS = ["--profile", "smoke", "--set", f"cell.camera.size={SIZE}", "--set",
+CONFIG_FLAGS = ["--profile", "smoke", "--set", f"cell.camera.size={SIZE}", "--set",
              "cell.camera.pixel_size=0.007", "--set", "train.checkpoint_every=2", "--set",
-             "agent.random_episodes=2", "--set", "train.episodes=6", "--set", "eval.episodes=8",
-             "--no-progress"]
+             "agent.random_episodes=2", "--set", "train.episodes=6", "--set", "eval.episodes=8"]
+CLI_FLAGS = [*CONFIG_FLAGS, "--no-progress"]
 
 
 class FakeRunner:

@@ -363,10 +363,10 @@ def summarize(df: pd.DataFrame) -> dict[str, Any]:
     }
 
 
-def _prepare(cfg: ExperimentConfig, spec: EvalSpec, out: Path) -> dict[int, dict[str, Any]]:
+def _prepare(cfg: ExperimentConfig, spec: EvalSpec, out: Path,
+             policy: EvalPolicy) -> dict[int, dict[str, Any]]:
     """Check the request against ``out/meta.json`` (or write it) and the journal against the
     plan; return the rows already in the journal. Call with ``out`` locked."""
-    policy = load_policy(spec.policy, cfg)  # fail here, not in every worker, on a bad spec
     meta = {"policy": policy_label(spec.policy), "policy_source": spec.policy,
             "policy_trained_episodes": getattr(policy, "trained_episodes", None),
             "condition": spec.condition, "episodes": spec.episodes, "seed": spec.seed,
@@ -446,16 +446,18 @@ def evaluate_many(cfg: ExperimentConfig, jobs: list[tuple[EvalSpec, Path]],
     for _, out in jobs:
         if out.exists() and not out.is_dir():
             raise ConfigError("out", f"{out} is a file, not a folder")
+    # Fail here, not in every worker, on a bad spec or a refused checkpoint.
+    policies = {spec.policy: load_policy(spec.policy, cfg) for spec, _ in jobs}
     with contextlib.ExitStack() as stack:
         for _, out in jobs:
             stack.enter_context(locked(out))
-        return _evaluate_locked(cfg, jobs, workers, backend, ray_address, progress)
+        done = [_prepare(cfg, spec, out, policies[spec.policy]) for spec, out in jobs]
+        return _evaluate_locked(cfg, jobs, done, workers, backend, ray_address, progress)
 
 
-def _evaluate_locked(cfg: ExperimentConfig, jobs: list[tuple[EvalSpec, Path]], workers: int,
-                     backend: str, ray_address: str | None,
-                     progress: bool) -> list[pd.DataFrame]:
-    done = [_prepare(cfg, spec, out) for spec, out in jobs]
+def _evaluate_locked(cfg: ExperimentConfig, jobs: list[tuple[EvalSpec, Path]],
+                     done: list[dict[int, dict[str, Any]]], workers: int, backend: str,
+                     ray_address: str | None, progress: bool) -> list[pd.DataFrame]:
     tasks = [replace(t, job=j) for j, (spec, _) in enumerate(jobs)
              for t in plan_episodes(cfg, spec) if t.index not in done[j]]
     total = sum(spec.episodes for spec, _ in jobs)
