@@ -179,3 +179,23 @@ def hosts_of(rows: Any) -> list[str]:
 
 def _missing(value: Any) -> bool:
     return value is None or (isinstance(value, float) and value != value) or value == ""
+
+
+def read_table(path: Path) -> Any:
+    """A results table (``.parquet`` or ``.csv``) as a pandas DataFrame.
+
+    Raises:
+        CorruptFileError: If the file cannot be parsed (truncated, not a table, not UTF-8).
+    """
+    import pandas as pd
+
+    try:
+        if path.suffix == ".parquet":
+            return pd.read_parquet(path)
+        return pd.read_csv(path)
+    except OSError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - pandas and pyarrow raise many kinds
+        first = " ".join(str(exc).split())[:160]
+        raise CorruptFileError(path, f"is not a readable table ({type(exc).__name__}: "
+                                     f"{first})") from None

@@ -40,7 +40,7 @@ import pandas as pd  # noqa: E402
 from vgs.checkpoint import atomic_write_text  # noqa: E402
 from vgs.errors import ConfigError  # noqa: E402
 from vgs.experiments.evaluate import CONDITIONS, summarize  # noqa: E402
-from vgs.runfolder import read_json  # noqa: E402
+from vgs.runfolder import read_json, read_table  # noqa: E402
 
 BOOTSTRAP_RESAMPLES = 2000
 # Fewer successful assemblies than this per policy: times are not compared (no verdict, no CI).
@@ -154,7 +154,7 @@ def load_results(out: Path) -> pd.DataFrame:
     if not tables:
         raise ConfigError("report", f"no evaluation results under {out / 'eval'} "
                                     "(expected eval/<policy>/<condition>/episodes.parquet)")
-    return pd.concat([pd.read_parquet(t) for t in tables], ignore_index=True)
+    return pd.concat([read_table(t) for t in tables], ignore_index=True)
 
 
 def hosts_note(df: pd.DataFrame) -> str:
@@ -387,11 +387,11 @@ def _training_rows(out: Path) -> list[list[str]]:
         csv_path = run / "episodes.csv"
         if not csv_path.exists():
             continue
-        ep = pd.read_csv(csv_path)
+        ep = read_table(csv_path)
         last = ep.tail(max(1, len(ep) // 5))
-        threshold = json.loads((run / "threshold.json").read_text())["threshold_s"] \
+        threshold = read_json(run / "threshold.json").get("threshold_s") \
             if (run / "threshold.json").exists() else None
-        conv = json.loads((run / "convergence.json").read_text()) \
+        conv = read_json(run / "convergence.json") \
             if (run / "convergence.json").exists() else {}
         rows.append([run.name, str(len(ep)), _f(ep["grasp_success"].mean(), 2),
                      _f(last["assembly_success"].mean(), 2),
@@ -517,7 +517,7 @@ def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
         from vgs.experiments.curves import plot_curves
 
         curves = figures / "learning_curves.png"
-        plot_curves(runs, curves, window=max(5, min(50, len(pd.read_csv(
+        plot_curves(runs, curves, window=max(5, min(50, len(read_table(
             runs[0] / "episodes.csv")) // 8)))
         doc.img(curves, "Learning curves (moving means) and grasp offsets during training")
         from vgs.experiments.heatmap import plot_heatmaps
@@ -533,7 +533,7 @@ def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
         doc.h(2, "Grasp-position sweep")
         summary = out / "sweep" / "summary.json"
         if summary.exists():
-            s = json.loads(summary.read_text())
+            s = read_json(summary, kind=object)
             rows = [[_f(r["offset_mm"], 1), f"{r['successes']}/{r['n']}",
                      _f(r["time_mean_s"]), _f(r["time_std_s"])]
                     for r in (s if isinstance(s, list) else s.get("offsets", []))]

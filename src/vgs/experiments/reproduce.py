@@ -44,7 +44,7 @@ from vgs.experiments.evaluate import EvalSpec, evaluate_many, summarize
 from vgs.experiments.layout import eval_jobs, train_runs
 from vgs.experiments.report import build_report
 from vgs.experiments.train import git_revision, train
-from vgs.runfolder import check_request, locked, read_json, write_json
+from vgs.runfolder import check_request, locked, read_json, read_table, write_json
 from vgs.validate import check_config
 
 
@@ -185,7 +185,7 @@ class Reproduction:
     def _merge(self, label: str, condition: str) -> None:
         """``eval/<label>/<condition>/episodes.parquet``: the tables of all training seeds."""
         parts = sorted((self.out / "eval" / label).glob(f"s*/{condition}/episodes.parquet"))
-        df = pd.concat([pd.read_parquet(p).assign(train_run=p.parent.parent.name)
+        df = pd.concat([read_table(p).assign(train_run=p.parent.parent.name)
                         for p in parts], ignore_index=True)
         if len(parts) > 1:  # several training seeds: keep the index unique per seed
             df["index"] = range(len(df))
