@@ -294,15 +294,15 @@ def cmd_reproduce(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     """Train both policies, evaluate them on the three conditions, sweep, report."""
     from vgs.experiments.reproduce import Reproduction
 
+    names = [name.strip() for name in args.stages.split(",") if name.strip()]
+    unknown = [name for name in names if name not in ("train", "evaluate", "sweep", "report")]
+    if unknown or not names:  # checked before the folder is touched
+        raise ConfigError("stages", f"unknown stage {unknown[0] if unknown else ''!r}; choose "
+                                    "from train, evaluate, sweep, report")
     rep = Reproduction(cfg, Path(args.out), workers=args.workers, backend=args.backend,
                        ray_address=args.ray_address, progress=not args.no_progress)
     stages = {"train": rep.train, "evaluate": rep.evaluate, "sweep": rep.sweep,
               "report": rep.report}
-    names = [name.strip() for name in args.stages.split(",") if name.strip()]
-    unknown = [name for name in names if name not in stages]
-    if unknown or not names:
-        raise ConfigError("stages", f"unknown stage {unknown[0] if unknown else ''!r}; choose "
-                                    "from train, evaluate, sweep, report")
     for name in stages:  # always in pipeline order
         if name in names:
             stages[name]()

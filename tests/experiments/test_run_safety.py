@@ -194,6 +194,14 @@ def test_train_extends_a_finished_run_and_refuses_another_seed(
     one_line(*vgs(capsys, "train", "--mode", "baseline", "--out", str(run), *fakes.CLI_FLAGS),
              "mode")
     pd.testing.assert_frame_equal(_train_rows(run), extended)  # nothing was touched
+    assert json.loads((run / "run.json").read_text()) == meta
+    # a run resumed on another host says so
+    assert meta["hosts"] == [host()]
+    assert main(["status", str(run)]) == 0 and "hosts" not in capsys.readouterr().out
+    meta["hosts"].insert(0, {"host_cpu": "Other CPU 9000", "mujoco_version": "3.0.0"})
+    (run / "run.json").write_text(json.dumps(meta))
+    assert main(["status", str(run)]) == 0
+    assert "trained on 2 hosts (Other CPU 9000, MuJoCo 3.0.0; " in capsys.readouterr().out
 
 
 def test_bad_values_are_refused_before_anything_is_written(
@@ -211,6 +219,7 @@ def test_bad_values_are_refused_before_anything_is_written(
         (["reproduce", "--set", "reproduce.train_seeds=(-1,)"], "reproduce.train_seeds"),
         (["reproduce", "--set", "reproduce.eval_seed=True"], "reproduce.eval_seed"),
         (["sweep", "--seed", "-2"], "--seed"),
+        (["reproduce", "--stages", "train,fly"], "stages"),
     ]
     for argv, field in cases:
         one_line(*vgs(capsys, *argv, "--out", str(out), "--profile", "smoke"), field)

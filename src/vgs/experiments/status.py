@@ -106,7 +106,8 @@ def train_progress(folder: Path, name: str | None = None) -> Progress:
         if folder.exists():
             return Progress(name, 0, 0, False, None, None, "no run.json")
         raise ConfigError("dir", f"{folder} does not exist")
-    cfg = _config(meta_path, read_json(meta_path).get("config"))
+    meta = read_json(meta_path)
+    cfg = _config(meta_path, meta.get("config"))
     total = cfg.train.episodes
     rows: list[dict[str, str]] = []
     if table.exists():
@@ -130,6 +131,11 @@ def train_progress(folder: Path, name: str | None = None) -> Progress:
         if done < cfg.agent.random_episodes:
             notes.append(f"random exploration until episode {cfg.agent.random_episodes} "
                          "(the episodes after it also run the forward pass: slower)")
+    hosts = meta.get("hosts") if isinstance(meta.get("hosts"), list) else []
+    if len(hosts) > 1:
+        names = hosts_of(hosts)
+        notes.append(f"trained on {len(hosts)} hosts ({'; '.join(names)}): the same scene can "
+                     "end differently on another CPU")
     if rows:
         window = rows[-RATE_WINDOW:]
         grasp = sum(_flag(r.get("grasp_success")) for r in window) / len(window)

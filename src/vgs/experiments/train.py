@@ -67,7 +67,7 @@ from vgs.grasping.agent import DeltaQMonitor, GraspAction, GraspAgent
 from vgs.grasping.preprocess import peg_mask
 from vgs.grasping.replay import ReplayBuffer, Transition
 from vgs.grasping.rewards import MODES, derive_threshold, grasp_reward
-from vgs.runfolder import check_request, locked, read_json, write_json
+from vgs.runfolder import check_request, host, locked, read_json, write_json
 from vgs.sim.camera import Heightmap
 from vgs.validate import check_config
 
@@ -258,10 +258,16 @@ def load_checkpoint(path: Path, agent: GraspAgent, replay: ReplayBuffer | None =
         raise CheckpointError(path, f"is incomplete ({type(exc).__name__}: {exc})") from None
 
 
-def _start(cfg: ExperimentConfig, mode: str, out: Path) -> tuple[ExperimentConfig, int]:
-    """Check the request against ``run.json`` (or write it); return the configuration and the
-    number of episodes the epsilon schedule spans."""
+def _check_start(cfg: ExperimentConfig, mode: str, out: Path
+                 ) -> tuple[int, dict[str, Any] | None]:
+    """Check the request against ``run.json`` without writing anything.
+
+    Returns:
+        The number of episodes the epsilon schedule spans, and the ``run.json`` to write once
+        the rest of the folder has been checked (None when it stays as it is).
+    """
     meta_path = out / "run.json"
+    here = host()
     if meta_path.exists():
         meta = read_json(meta_path)
         if meta.get("mode") != mode:
@@ -271,19 +277,21 @@ def _start(cfg: ExperimentConfig, mode: str, out: Path) -> tuple[ExperimentConfi
         grown = check_request(meta["config"], cfg, meta_path, extendable=("train.episodes",))
         schedule = int(meta.get("schedule_episodes", meta["config"].get("train", {}).get(
             "episodes", cfg.train.episodes)))
-        if grown:
-            meta.update(config=to_dict(cfg), schedule_episodes=schedule)
-            write_json(meta_path, meta)
-        return cfg, schedule
+        hosts = meta.get("hosts") if isinstance(meta.get("hosts"), list) else []
+        if not grown and here in hosts:
+            return schedule, None
+        meta.update(config=to_dict(cfg), schedule_episodes=schedule,
+                    hosts=hosts + ([here] if here not in hosts else []))
+        return schedule, meta
     leftovers = [n for n in ("checkpoint.pt", "episodes.csv") if (out / n).exists()]
     if leftovers:
         raise CorruptFileError(meta_path, f"is missing but {out} holds {', '.join(leftovers)}; "
                                           "restore it or train into a new folder")
-    write_json(meta_path, {"mode": mode, "config": to_dict(cfg),
-                           "schedule_episodes": cfg.train.episodes,
-                           "git_revision": git_revision(), "python": sys.version.split()[0],
-                           "torch": torch.__version__})
-    return cfg, cfg.train.episodes
+    return cfg.train.episodes, {"mode": mode, "config": to_dict(cfg),
+                                "schedule_episodes": cfg.train.episodes,
+                                "git_revision": git_revision(),
+                                "python": sys.version.split()[0], "torch": torch.__version__,
+                                "hosts": [here]}
 
 
 def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
@@ -319,10 +327,12 @@ def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
 
 def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: bool,
            threads: int | None, position: int) -> Path:
-    cfg, schedule = _start(cfg, mode, out)
+    # Everything is checked before anything is written: the networks can be built, the request
+    # matches run.json, the checkpoint and the table fit.
     total = cfg.train.episodes
     torch.set_num_threads(threads or max(1, min(4, os.cpu_count() or 1)))
     agent = GraspAgent(cfg.network, cfg.agent, device=device, seed=cfg.seed)
+    schedule, new_meta = _check_start(cfg, mode, out)
     replay = ReplayBuffer(cfg.agent.replay_capacity)
     monitor = DeltaQMonitor.from_config(cfg.agent)
     state = TrainState(exploration_times=[])
@@ -340,6 +350,8 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
     if cfg.reward.threshold_s is not None:
         state.threshold = cfg.reward.threshold_s
     rows = read_rows(out / "episodes.csv", cfg, mode, state.episode, state.table_sha256)
+    if new_meta is not None:
+        write_json(out / "run.json", new_meta)
 
     from torch.utils.tensorboard import SummaryWriter
 
