@@ -166,6 +166,9 @@ def eval_progress(folder: Path, name: str | None = None, total: int | None = Non
     summary = folder / "summary.json"
     finished = summary.exists() and total is not None and done >= total
     notes = []
+    if not meta_path.exists() and journal.exists():
+        notes.append("no meta.json: the planned number of episodes is unknown (a resume with "
+                     "the same command checks every row and writes it again)")
     if rows:
         ok = sum(bool(r["success"]) for r in rows)
         notes.append(f"assembled {ok}/{len(rows)}")
