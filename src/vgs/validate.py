@@ -91,7 +91,16 @@ def _coerce(field: str, value: Any, tp: Any) -> Any:
 
 
 def _walk(cfg: Any, prefix: str) -> Any:
-    hints = typing.get_type_hints(type(cfg))
+    try:
+        hints = typing.get_type_hints(type(cfg))
+    except (NameError, TypeError):  # an annotation this module cannot resolve: check each
+        hints = {}
+        namespace = vars(__import__(type(cfg).__module__, fromlist=["_"]))
+        for f in fields(cfg):
+            try:
+                hints[f.name] = eval(f.type, namespace) if isinstance(f.type, str) else f.type  # noqa: S307
+            except Exception:  # noqa: BLE001 - leave that field to its dataclass
+                continue
     changes = {}
     for f in fields(cfg):
         value = getattr(cfg, f.name)
@@ -100,7 +109,7 @@ def _walk(cfg: Any, prefix: str) -> Any:
             new = _walk(value, f"{path}.")
         else:
             new = _coerce(path, value, hints.get(f.name, Any))
-        if new is not value and new != value or type(new) is not type(value):
+        if repr(new) != repr(value):  # (repr tells 12 from 12.0, also inside tuples)
             changes[f.name] = new
     return replace(cfg, **changes) if changes else cfg
 
