@@ -5,7 +5,9 @@ Every command but ``status`` takes ``--profile`` and configuration overrides (``
 ... and the generic ``--set key=value`` with a dotted path into
 :class:`vgs.config.ExperimentConfig`). Bad input,
 whether argparse rejects it or a :class:`vgs.errors.VGSError` is raised, ends with one line
-``vgs: error: <field>: <message>`` on stderr and exit code 2.
+``vgs: error: <field>: <message>`` on stderr and exit code 2; so do an OS error on a file or
+folder (an ``--out`` that is a file, a full disk) and a corrupt file of a run folder. Ctrl-C
+ends with one line saying how to resume and exit code 130.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from typing import Any, NoReturn
 from vgs.config import ExperimentConfig, PegConfig, override, profile
 from vgs.errors import ConfigError, VGSError
 from vgs.jsonsafe import json_safe
+from vgs.validate import check_config
 
 # Flag -> dotted configuration path. Values are SI (m, kg, N).
 OVERRIDE_FLAGS: dict[str, str] = {
@@ -115,8 +118,21 @@ def config_from_args(args: argparse.Namespace) -> ExperimentConfig:
         if not sep or not key.strip():
             raise ConfigError("set", f"expected key=value, got {pair!r}")
         cfg = apply_override(cfg, key.strip(), parse_value(text.strip()))
+    cfg = check_config(cfg)  # types (True is not a mass) and seeds
     check_hole_fits(cfg)
     return cfg
+
+
+def seed_arg(text: str) -> int:
+    """An argparse type: a seed is a non-negative integer."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"a seed must be a non-negative integer, got "
+                                         f"{text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"a seed must be a non-negative integer, got {value}")
+    return value
 
 
 def _float_list_mm(text: str) -> tuple[float, ...]:
@@ -164,6 +180,7 @@ def cmd_sweep(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
                      length_range=args.length_range,
                      seed=cfg.seed if args.seed is None else args.seed)
     out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)  # an unusable --out fails now, not after the sweep
     summary = sweep_to_folder(cfg, spec, out, workers=args.workers)
     print(f"{'offset [mm]':>11}  {'n':>3}  {'success':>7}  {'mean [s]':>8}  {'std [s]':>7}  "
           f"{'min [s]':>7}  {'max [s]':>7}")
@@ -277,15 +294,15 @@ def cmd_reproduce(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     """Train both policies, evaluate them on the three conditions, sweep, report."""
     from vgs.experiments.reproduce import Reproduction
 
+    names = [name.strip() for name in args.stages.split(",") if name.strip()]
+    unknown = [name for name in names if name not in ("train", "evaluate", "sweep", "report")]
+    if unknown or not names:  # checked before the folder is touched
+        raise ConfigError("stages", f"unknown stage {unknown[0] if unknown else ''!r}; choose "
+                                    "from train, evaluate, sweep, report")
     rep = Reproduction(cfg, Path(args.out), workers=args.workers, backend=args.backend,
                        ray_address=args.ray_address, progress=not args.no_progress)
     stages = {"train": rep.train, "evaluate": rep.evaluate, "sweep": rep.sweep,
               "report": rep.report}
-    names = [name.strip() for name in args.stages.split(",") if name.strip()]
-    unknown = [name for name in names if name not in stages]
-    if unknown or not names:
-        raise ConfigError("stages", f"unknown stage {unknown[0] if unknown else ''!r}; choose "
-                                    "from train, evaluate, sweep, report")
     for name in stages:  # always in pipeline order
         if name in names:
             stages[name]()
@@ -360,7 +377,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     demo = sub.add_parser("demo", parents=[common], help="one whole episode with a figure")
-    demo.add_argument("--seed", type=int, help="episode seed (default: the profile's seed)")
+    demo.add_argument("--seed", type=seed_arg, help="episode seed (default: the profile's seed)")
     demo.add_argument("--json", action="store_true",
                       help="print only the episode record as JSON on stdout")
     demo.add_argument("--out", default="runs/demo",
@@ -384,7 +401,7 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--length-range", type=float, default=0.0,
                        help="peg length factor uniform in 1 +- this; the mass follows the "
                             "volume (default: 0)")
-    sweep.add_argument("--seed", type=int, help="root seed (default: the profile's seed)")
+    sweep.add_argument("--seed", type=seed_arg, help="root seed (default: the profile's seed)")
     sweep.add_argument("--workers", type=int,
                        help="worker processes (default: the number of CPU cores)")
     sweep.set_defaults(func=cmd_sweep)
@@ -392,7 +409,7 @@ def build_parser() -> argparse.ArgumentParser:
     scene = sub.add_parser("export-scene", parents=[common],
                            help="write the cell as MJCF for MuJoCo's viewer")
     scene.add_argument("--out", default="scene.xml", help="MJCF file (default: %(default)s)")
-    scene.add_argument("--seed", type=int, default=0,
+    scene.add_argument("--seed", type=seed_arg, default=0,
                        help="reset seed stored as the 'home' keyframe (default: 0)")
     scene.set_defaults(func=cmd_export_scene)
 
@@ -412,7 +429,7 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--out", required=True, help="run folder (started again: resumes)")
     train.add_argument("--episodes", type=int, help="episodes in all (default: the profile's)")
     train.add_argument("--backbone", help="densenet121 or light (default: the profile's)")
-    train.add_argument("--seed", type=int, help="root seed (default: the profile's)")
+    train.add_argument("--seed", type=seed_arg, help="root seed (default: the profile's)")
     train.add_argument("--device", help="cpu, cuda or auto (default: the profile's)")
     train.add_argument("--no-progress", action="store_true", help="no progress bar")
     train.set_defaults(func=cmd_train)
@@ -441,7 +458,7 @@ def build_parser() -> argparse.ArgumentParser:
                                "following (default: %(default)s)")
     evaluate.add_argument("--episodes", type=int,
                           help="test episodes (default: the profile's eval.episodes)")
-    evaluate.add_argument("--seed", type=int,
+    evaluate.add_argument("--seed", type=seed_arg,
                           help="root seed of the test scenes (default: reproduce.eval_seed)")
     _parallel_flags(evaluate)
     evaluate.add_argument("--out", required=True, help="output folder (started again: resumes)")
@@ -498,18 +515,37 @@ def main(argv: Sequence[str] | None = None) -> int:
     Args:
         argv: Arguments without the program name (default: ``sys.argv[1:]``).
     """
+    args = None
     try:
         args = build_parser().parse_args(argv)
         cfg = config_from_args(args) if hasattr(args, "profile") else None
         return args.func(args, cfg)
     except VGSError as exc:
-        message = " ".join(str(exc).split())
-        print(f"vgs: error: {message}", file=sys.stderr)
-        return 2
-    except BrokenPipeError:
-        # The reader of stdout went away (e.g. `vgs model-info | head`): stop quietly.
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 1
+        return _error(str(exc))
+    except OSError as exc:
+        if isinstance(exc, BrokenPipeError):
+            # The reader of stdout went away (e.g. `vgs model-info | head`): stop quietly.
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return 1
+        # A file or folder the command cannot use: an --out that is a file, a full disk, no
+        # permission. The run's files are as the last completed write left them.
+        where = f"{exc.filename}: " if exc.filename else ""
+        return _error(f"{where}{exc.strerror or exc}")
+    except KeyboardInterrupt:
+        command = getattr(args, "command", None)
+        again = ("; run the same command again to resume (finished episodes are kept)"
+                 if command in RESUMABLE else "")
+        print(f"vgs: interrupted{again}", file=sys.stderr)
+        return 130
+
+
+RESUMABLE = ("train", "evaluate", "reproduce")
+
+
+def _error(message: str) -> int:
+    message = " ".join(message.split())
+    print(f"vgs: error: {message}", file=sys.stderr)
+    return 2
 
 
 if __name__ == "__main__":

@@ -20,12 +20,20 @@ from vgs.experiments.evaluate import (
     evaluate_many,
     plan_episodes,
 )
-from vgs.grasping.agent import GraspAgent
+from vgs.experiments.train import TrainState, save_checkpoint
+from vgs.grasping.agent import DeltaQMonitor, GraspAgent
+from vgs.grasping.replay import ReplayBuffer
 
 from . import eval_policies
 
 POLICIES = eval_policies.__name__
 VOLATILE = ["wall_s"]
+
+
+def save_agent(path: Path, agent: GraspAgent, cfg, episode: int) -> None:
+    """A training checkpoint of ``agent`` after ``episode`` episodes (empty replay)."""
+    save_checkpoint(path, agent, ReplayBuffer(cfg.agent.replay_capacity), TrainState(episode),
+                    DeltaQMonitor.from_config(cfg.agent))
 
 
 @pytest.fixture(scope="module")
@@ -38,7 +46,7 @@ def run_dir(tmp_path_factory: pytest.TempPathFactory, cfg) -> Path:
     """A training-run folder holding an untrained network (enough for greedy decisions)."""
     folder = tmp_path_factory.mktemp("run")
     agent = GraspAgent(cfg.network, cfg.agent, seed=5)
-    torch.save({"agent": agent.state_dict(), "episode": 0}, folder / "checkpoint.pt")
+    save_agent(folder / "checkpoint.pt", agent, cfg, episode=0)
     (folder / "run.json").write_text(json.dumps({"mode": "vgs", "config": to_dict(cfg)}))
     return folder
 
@@ -186,14 +194,14 @@ def test_a_run_that_trained_on_is_another_policy(cfg, tmp_path: Path) -> None:
     run.mkdir()
     agent = GraspAgent(cfg.network, cfg.agent, seed=5)
     (run / "run.json").write_text(json.dumps({"mode": "vgs", "config": to_dict(cfg)}))
-    torch.save({"agent": agent.state_dict(), "episode": 3}, run / "checkpoint.pt")
+    save_agent(run / "checkpoint.pt", agent, cfg, episode=3)
     out = tmp_path / "eval"
     spec = EvalSpec(str(run), "nominal", 1, seed=2)
     evaluate(cfg, spec, out, progress=False)
     meta = json.loads((out / "meta.json").read_text())
     assert meta["policy_trained_episodes"] == 3
     evaluate(cfg, spec, out, progress=False)  # the same checkpoint: resumes
-    torch.save({"agent": agent.state_dict(), "episode": 9}, run / "checkpoint.pt")
+    save_agent(run / "checkpoint.pt", agent, cfg, episode=9)
     with pytest.raises(ConfigError, match="policy_trained_episodes"):
         evaluate(cfg, spec, out, progress=False)
     # folders written before the count was recorded resume as before

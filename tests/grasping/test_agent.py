@@ -198,7 +198,7 @@ def test_state_dict_round_trip() -> None:
     torch.save(agent.state_dict(), buffer)
     buffer.seek(0)
     other = _agent(seed=7, learning_rate=0.01)
-    other.load_state_dict(torch.load(buffer, weights_only=False))
+    other.load_state_dict(torch.load(buffer, weights_only=True))
     assert other.updates == 3
     np.testing.assert_array_equal(agent.q_values(color, depth), other.q_values(color, depth))
     np.testing.assert_array_equal(agent.q_values(color, depth, target=True),

@@ -8,7 +8,6 @@ random-exploration phase beside the last ``window`` episodes. Also returns a sum
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import matplotlib
@@ -30,7 +29,9 @@ def load_episodes(run_dir: Path) -> tuple[pd.DataFrame, dict]:
     table, meta = run_dir / "episodes.csv", run_dir / "run.json"
     if not table.exists() or not meta.exists():
         raise ConfigError("run_dir", f"{run_dir} holds no training run (episodes.csv, run.json)")
-    return pd.read_csv(table), json.loads(meta.read_text())
+    from vgs.runfolder import read_json, read_table
+
+    return read_table(table), read_json(meta)
 
 
 def summarize(df: pd.DataFrame, random_episodes: int, window: int) -> dict[str, float]:

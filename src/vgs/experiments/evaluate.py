@@ -25,16 +25,26 @@ with it, the pool is rebuilt and the episode is tried again, up to :data:`MAX_AT
 (then ``failure_reason = "worker_lost"``).
 
 Resume: every finished row is appended to ``journal.jsonl`` at once; started again with the same
-``--out`` the run skips the episodes already there. At the end ``episodes.parquet``,
-``episodes.csv`` and ``summary.json`` are written.
+``--out`` the run compares the request with ``meta.json`` (policy, condition, seed,
+configuration; only a larger number of episodes is accepted), checks every journal row against
+the planned episode of its index (episode seed, peg mass and length), and skips the episodes
+already there. A line cut short by a kill (the last one, without its newline) is dropped and its
+episode runs again; a duplicate, a row of another plan or an unreadable line is refused, naming
+the file and line. The folder is locked while the run works; ``meta.json`` is written
+atomically. At the end ``episodes.parquet``, ``episodes.csv`` and ``summary.json`` are written.
+
+Each row records the CPU model and the MuJoCo version of the host that ran it
+(``host_cpu``, ``mujoco_version``): the same scene can end differently on another CPU.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import multiprocessing as mp
 import os
+import signal
 import sys
 import time
 from collections.abc import Callable, Generator, Iterator
@@ -50,9 +60,12 @@ from tqdm import tqdm
 
 from vgs.assembly.episode import EpisodeRunner
 from vgs.assembly.record import EpisodeRecord
-from vgs.config import ExperimentConfig, PegConfig, same_config, to_dict
-from vgs.errors import ConfigError, VGSError
+from vgs.config import ExperimentConfig, PegConfig, to_dict
+from vgs.errors import ConfigError, CorruptFileError, RunMismatchError, VGSError
+from vgs.experiments.journal import encode_row, read_journal
 from vgs.experiments.policies import EvalPolicy, is_run_dir, load_policy, policy_label
+from vgs.runfolder import check_request, host, locked, read_json, write_json
+from vgs.validate import check_config, check_seed
 
 CONDITIONS = ("nominal", "mass", "length")
 BACKENDS = ("local", "ray")
@@ -79,8 +92,10 @@ class EvalSpec:
     def __post_init__(self) -> None:
         if self.condition not in CONDITIONS:
             raise ConfigError("condition", f"must be one of {CONDITIONS}, got {self.condition!r}")
-        if self.episodes < 1:
-            raise ConfigError("episodes", f"must be >= 1, got {self.episodes}")
+        if isinstance(self.episodes, bool) or not isinstance(self.episodes, int) \
+                or self.episodes < 1:
+            raise ConfigError("episodes", f"must be an integer >= 1, got {self.episodes!r}")
+        check_seed("seed", self.seed)
 
 
 @dataclass(frozen=True)
@@ -181,6 +196,8 @@ _WORKER: EpisodeWorker | None = None
 
 def _init_process(cfg: ExperimentConfig) -> None:
     global _WORKER
+    # Ctrl-C reaches the whole process group: the parent handles it (and stops the pool).
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     _WORKER = EpisodeWorker(cfg)
 
 
@@ -199,7 +216,7 @@ def _row(task: EpisodeTask, record: EpisodeRecord, decision: dict[str, Any],
     return {"job": task.job, "index": task.index, **record.to_row(),
             "rotation": decision.get("rotation", -1), "row": decision.get("row", -1),
             "col": decision.get("col", -1), "q_value": decision.get("q_value", math.nan),
-            "wall_s": wall}
+            "wall_s": wall, **host()}
 
 
 def _lost_row(task: EpisodeTask) -> dict[str, Any]:
@@ -314,18 +331,6 @@ def run_ray(cfg: ExperimentConfig, tasks: list[EpisodeTask], workers: int,
 # -- the evaluation run --------------------------------------------------------------------------
 
 
-def _read_journal(path: Path) -> dict[int, dict[str, Any]]:
-    rows: dict[int, dict[str, Any]] = {}
-    if path.exists():
-        for line in path.read_text().splitlines():
-            try:
-                row = json.loads(line)
-            except json.JSONDecodeError:  # a line cut short by a kill
-                continue
-            rows[int(row["index"])] = row
-    return rows
-
-
 def summarize(df: pd.DataFrame) -> dict[str, Any]:
     """Success rates and assembly-time statistics of one evaluation table.
 
@@ -358,33 +363,40 @@ def summarize(df: pd.DataFrame) -> dict[str, Any]:
     }
 
 
-def _prepare(cfg: ExperimentConfig, spec: EvalSpec, out: Path) -> dict[int, dict[str, Any]]:
-    """Check and write ``out/meta.json``; return the rows already in the journal."""
-    policy = load_policy(spec.policy, cfg)  # fail here, not in every worker, on a bad spec
-    out.mkdir(parents=True, exist_ok=True)
+def _prepare(cfg: ExperimentConfig, spec: EvalSpec, out: Path,
+             policy: EvalPolicy) -> dict[int, dict[str, Any]]:
+    """Check the request against ``out/meta.json`` (or write it) and the journal against the
+    plan; return the rows already in the journal. Call with ``out`` locked."""
     meta = {"policy": policy_label(spec.policy), "policy_source": spec.policy,
             "policy_trained_episodes": getattr(policy, "trained_episodes", None),
             "condition": spec.condition, "episodes": spec.episodes, "seed": spec.seed,
             "config": to_dict(cfg)}
     meta_path = out / "meta.json"
     if meta_path.exists():
-        old = json.loads(meta_path.read_text())
+        old = read_json(meta_path)
         # A training run that trained on since the rows were written is another policy.
         keys = ["policy_source", "condition", "seed"]
         if "policy_trained_episodes" in old:  # (not recorded before 2026-11-22)
             keys.append("policy_trained_episodes")
-        changed = [k for k in keys if json.dumps(old.get(k)) != json.dumps(meta[k])]
-        if not same_config(old.get("config"), cfg):
-            changed.append("config")
-        if changed:
-            raise ConfigError("out", f"{out} holds another evaluation (differs in {changed}); "
-                                     "use a new folder")
-    meta_path.write_text(json.dumps(meta, indent=2))
+        for key in keys:
+            if json.dumps(old.get(key)) != json.dumps(meta[key]):
+                raise RunMismatchError(key, f"{out} holds another evaluation ({old.get(key)!r}, "
+                                            f"not {meta[key]!r}); use a new folder")
+        if not isinstance(old.get("config"), dict):
+            raise CorruptFileError(meta_path, "records no configuration")
+        check_request(old["config"], cfg, meta_path, extendable=("eval.episodes",))
+        recorded = old.get("episodes")
+        if isinstance(recorded, int) and spec.episodes < recorded:
+            raise RunMismatchError("episodes", f"{out} holds an evaluation of {recorded} "
+                                               f"episodes, not {spec.episodes}; ask for "
+                                               f"{recorded} or more (more extends it), or use a "
+                                               "new folder")
     journal = out / "journal.jsonl"
-    rows = _read_journal(journal)
-    if journal.exists():  # drop a line torn by a kill, so that appending starts on a new line
-        tmp = journal.with_suffix(".tmp")
-        tmp.write_text("".join(json.dumps(rows[i]) + "\n" for i in sorted(rows)))
+    rows, cut = read_journal(journal, plan_episodes(cfg, spec))
+    write_json(meta_path, meta)
+    if cut:  # drop the line torn by a kill, so that appending starts on a new line
+        tmp = journal.with_name(f".{journal.name}.tmp")
+        tmp.write_text("".join(encode_row(rows[i]) for i in sorted(rows)))
         os.replace(tmp, journal)
     return rows
 
@@ -395,10 +407,14 @@ def _finish(spec: EvalSpec, out: Path, rows: dict[int, dict[str, Any]]) -> pd.Da
     df.insert(1, "policy", label)
     df.insert(2, "condition", spec.condition)
     df.insert(3, "root_seed", spec.seed)
-    df.to_parquet(out / "episodes.parquet", index=False)
-    df.to_csv(out / "episodes.csv", index=False)
-    (out / "summary.json").write_text(json.dumps(
-        {"policy": label, "condition": spec.condition, **summarize(df)}, indent=2))
+    # Each file is written whole and renamed into place; summary.json, which marks the
+    # evaluation finished, comes last.
+    for name, write in (("episodes.parquet", df.to_parquet), ("episodes.csv", df.to_csv)):
+        tmp = out / f".{name}.tmp"
+        write(tmp, index=False)
+        os.replace(tmp, out / name)
+    write_json(out / "summary.json", {"policy": label, "condition": spec.condition,
+                                      **summarize(df)})
     return df
 
 
@@ -414,14 +430,34 @@ def evaluate_many(cfg: ExperimentConfig, jobs: list[tuple[EvalSpec, Path]],
         One table per job, rows in index order.
 
     Raises:
-        ConfigError: On a bad backend, worker count or policy, or a folder of another run.
+        ConfigError: On a bad backend, worker count, configuration or policy (checked before
+            anything is written).
+        RunMismatchError: If a folder holds another evaluation.
+        CorruptFileError: If a folder's ``meta.json`` or journal cannot be read or holds rows
+            of another plan.
+        FolderBusyError: If another process is working in one of the folders.
     """
     if backend not in BACKENDS:
         raise ConfigError("backend", f"must be one of {BACKENDS}, got {backend!r}")
     workers = (os.cpu_count() or 1) if workers is None else workers
-    if workers < 1:
-        raise ConfigError("workers", f"must be >= 1, got {workers}")
-    done = [_prepare(cfg, spec, out) for spec, out in jobs]
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ConfigError("workers", f"must be an integer >= 1, got {workers!r}")
+    cfg = check_config(cfg)  # before anything is written
+    for _, out in jobs:
+        if out.exists() and not out.is_dir():
+            raise ConfigError("out", f"{out} is a file, not a folder")
+    # Fail here, not in every worker, on a bad spec or a refused checkpoint.
+    policies = {spec.policy: load_policy(spec.policy, cfg) for spec, _ in jobs}
+    with contextlib.ExitStack() as stack:
+        for _, out in jobs:
+            stack.enter_context(locked(out))
+        done = [_prepare(cfg, spec, out, policies[spec.policy]) for spec, out in jobs]
+        return _evaluate_locked(cfg, jobs, done, workers, backend, ray_address, progress)
+
+
+def _evaluate_locked(cfg: ExperimentConfig, jobs: list[tuple[EvalSpec, Path]],
+                     done: list[dict[int, dict[str, Any]]], workers: int, backend: str,
+                     ray_address: str | None, progress: bool) -> list[pd.DataFrame]:
     tasks = [replace(t, job=j) for j, (spec, _) in enumerate(jobs)
              for t in plan_episodes(cfg, spec) if t.index not in done[j]]
     total = sum(spec.episodes for spec, _ in jobs)
@@ -441,7 +477,7 @@ def evaluate_many(cfg: ExperimentConfig, jobs: list[tuple[EvalSpec, Path]],
                 for row in source:
                     job = int(row["job"])
                     done[job][int(row["index"])] = row
-                    journals[job].write(json.dumps(row) + "\n")
+                    journals[job].write(encode_row(row))
                     journals[job].flush()
                     bar.update(1)
                     finished, ok = finished + 1, ok + int(bool(row["success"]))

@@ -17,7 +17,6 @@ episode seed), never the simulator state.
 from __future__ import annotations
 
 import importlib
-import json
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -28,7 +27,7 @@ import numpy as np
 
 from vgs.assembly.episode import GraspCommand, center_policy
 from vgs.config import ExperimentConfig, from_dict
-from vgs.errors import ConfigError
+from vgs.errors import ConfigError, CorruptFileError
 from vgs.grasping.actions import peg_mask, rotation_angle
 from vgs.sim.camera import Heightmap
 
@@ -98,22 +97,29 @@ def load_trained_agent(run_dir: Path, device: str = "cpu", field: str = "policy"
                        ) -> tuple[ExperimentConfig, dict[str, Any], Any, int]:
     """Configuration, ``run.json``, trained agent and episode count of a ``vgs train`` run.
 
+    The checkpoint is read pickle-free (:mod:`vgs.checkpoint`): a file that is not a vgs
+    checkpoint is refused before anything in it is unpickled.
+
     Raises:
         ConfigError: ``field`` if the folder holds no run (``run.json`` and ``checkpoint.pt``).
+        CorruptFileError: If ``run.json`` cannot be read;
+            :class:`vgs.errors.CheckpointError` if the checkpoint is refused.
     """
-    import torch
-
+    from vgs.experiments.train import load_checkpoint
     from vgs.grasping.agent import GraspAgent
+    from vgs.runfolder import read_json
 
     meta_path, ckpt = run_dir / "run.json", run_dir / "checkpoint.pt"
     if not meta_path.exists() or not ckpt.exists():
         raise ConfigError(field, f"{run_dir} holds no training run (run.json and checkpoint.pt)")
-    meta = json.loads(meta_path.read_text())
-    run_cfg = from_dict(ExperimentConfig, meta["config"])
-    saved = torch.load(ckpt, map_location=device, weights_only=False)
+    meta = read_json(meta_path)
+    try:
+        run_cfg = from_dict(ExperimentConfig, meta["config"])
+    except (KeyError, TypeError, ValueError) as exc:
+        raise CorruptFileError(meta_path, f"records no usable configuration ({exc})") from None
     agent = GraspAgent(run_cfg.network, run_cfg.agent, device=device, seed=run_cfg.seed)
-    agent.load_state_dict(saved["agent"])
-    return run_cfg, meta, agent, int(saved.get("episode", -1))
+    state = load_checkpoint(ckpt, agent, device=device)
+    return run_cfg, meta, agent, state.episode
 
 
 class GreedyPolicy:
@@ -171,5 +177,7 @@ def load_policy(spec: str, cfg: ExperimentConfig, device: str = "cpu") -> EvalPo
 def policy_label(spec: str) -> str:
     """Short name of a policy spec: the run's mode for a run folder, else the spec."""
     if is_run_dir(spec):
-        return str(json.loads((Path(spec) / "run.json").read_text())["mode"])
+        from vgs.runfolder import read_json
+
+        return str(read_json(Path(spec) / "run.json").get("mode"))
     return spec

@@ -37,8 +37,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from vgs.checkpoint import atomic_write_text  # noqa: E402
 from vgs.errors import ConfigError  # noqa: E402
 from vgs.experiments.evaluate import CONDITIONS, summarize  # noqa: E402
+from vgs.runfolder import read_json, read_table  # noqa: E402
 
 BOOTSTRAP_RESAMPLES = 2000
 # Fewer successful assemblies than this per policy: times are not compared (no verdict, no CI).
@@ -152,7 +154,30 @@ def load_results(out: Path) -> pd.DataFrame:
     if not tables:
         raise ConfigError("report", f"no evaluation results under {out / 'eval'} "
                                     "(expected eval/<policy>/<condition>/episodes.parquet)")
-    return pd.concat([pd.read_parquet(t) for t in tables], ignore_index=True)
+    return pd.concat([read_table(t) for t in tables], ignore_index=True)
+
+
+def hosts_note(df: pd.DataFrame) -> str:
+    """A sentence on the hosts the test episodes ran on (``host_cpu``, ``mujoco_version``
+    columns; tables written before they were recorded have none): empty when not recorded,
+    a warning naming the evaluations whose episodes come from several hosts."""
+    if "host_cpu" not in df.columns:
+        return ""
+    from vgs.runfolder import hosts_of
+
+    keys = [k for k in ("policy", "condition", "train_run") if k in df.columns]
+    mixed = []
+    for key, part in df.groupby(keys, sort=True):
+        names = hosts_of(part[["host_cpu", "mujoco_version"]].to_dict("records"))
+        if len(names) > 1:
+            label = "/".join(str(k) for k in (key if isinstance(key, tuple) else (key,)))
+            mixed.append(f"{label} ({'; '.join(names)})")
+    if mixed:
+        return ("**Hosts.** The episodes of " + ", ".join(mixed) + " come from several hosts: "
+                "MuJoCo's floating point differs between CPUs, so the same scene can end "
+                "differently on another host; compare such results with care.")
+    names = hosts_of(df[["host_cpu", "mujoco_version"]].to_dict("records"))
+    return f"All test episodes ran on one host: {names[0]}." if names else ""
 
 
 def policy_order(policies: list[str]) -> list[str]:
@@ -362,11 +387,11 @@ def _training_rows(out: Path) -> list[list[str]]:
         csv_path = run / "episodes.csv"
         if not csv_path.exists():
             continue
-        ep = pd.read_csv(csv_path)
+        ep = read_table(csv_path)
         last = ep.tail(max(1, len(ep) // 5))
-        threshold = json.loads((run / "threshold.json").read_text())["threshold_s"] \
+        threshold = read_json(run / "threshold.json").get("threshold_s") \
             if (run / "threshold.json").exists() else None
-        conv = json.loads((run / "convergence.json").read_text()) \
+        conv = read_json(run / "convergence.json") \
             if (run / "convergence.json").exists() else {}
         rows.append([run.name, str(len(ep)), _f(ep["grasp_success"].mean(), 2),
                      _f(last["assembly_success"].mean(), 2),
@@ -386,8 +411,7 @@ def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
     figures.mkdir(parents=True, exist_ok=True)
     table = results_table(df)
     table.to_csv(out / "results.csv", index=False)
-    meta = json.loads((out / "reproduce.json").read_text()) \
-        if (out / "reproduce.json").exists() else {}
+    meta = read_json(out / "reproduce.json") if (out / "reproduce.json").exists() else {}
 
     doc = Doc(out)
     doc.h(1, title)
@@ -404,6 +428,10 @@ def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
           "simulator and controller; compare the gains, spreads and the direction of effects, "
           "not the absolute seconds. Failed episodes count in the success rate only. Gain = "
           "(T_base - T_VGS) / T_base on mean times, 95 % paired-bootstrap interval.")
+
+    host_note = hosts_note(df)
+    if host_note:
+        doc.p(host_note)
 
     head_rows = []
     for condition in [c for c in CONDITIONS if c in set(table["condition"])]:
@@ -489,7 +517,7 @@ def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
         from vgs.experiments.curves import plot_curves
 
         curves = figures / "learning_curves.png"
-        plot_curves(runs, curves, window=max(5, min(50, len(pd.read_csv(
+        plot_curves(runs, curves, window=max(5, min(50, len(read_table(
             runs[0] / "episodes.csv")) // 8)))
         doc.img(curves, "Learning curves (moving means) and grasp offsets during training")
         from vgs.experiments.heatmap import plot_heatmaps
@@ -505,7 +533,7 @@ def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
         doc.h(2, "Grasp-position sweep")
         summary = out / "sweep" / "summary.json"
         if summary.exists():
-            s = json.loads(summary.read_text())
+            s = read_json(summary, kind=object)
             rows = [[_f(r["offset_mm"], 1), f"{r['successes']}/{r['n']}",
                      _f(r["time_mean_s"]), _f(r["time_std_s"])]
                     for r in (s if isinstance(s, list) else s.get("offsets", []))]
@@ -513,8 +541,8 @@ def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
                 doc.table(["offset [mm]", "success", "mean time [s]", "std [s]"], rows)
         doc.img(sweep_png, "Assembly time against a fixed grasp offset (with eq. 2, 3)")
 
-    (out / "report.md").write_text(doc.markdown())
-    (out / "report.html").write_text(doc.html(title))
+    atomic_write_text(out / "report.md", doc.markdown())
+    atomic_write_text(out / "report.html", doc.html(title))
     return out / "report.md"
 
 

@@ -15,16 +15,19 @@ Stages, each resumable on its own (run the same command again to continue):
 4. **report**: :func:`vgs.experiments.report.build_report`.
 
 ``DIR/reproduce.json`` holds the profile, the configuration, the machine and the wall time of
-each stage. A folder made with another configuration is refused.
+each stage; it is written atomically. A folder made with another configuration is refused,
+naming the first field that differs; only ``eval.episodes`` may grow (more tests: the journals'
+rows are kept and the extra episodes run). Each stage holds the folder's lock
+(:func:`vgs.runfolder.locked`), so a second ``vgs reproduce`` in the same folder is refused.
 """
 
 from __future__ import annotations
 
-import json
 import multiprocessing as mp
 import os
 import platform
 import shlex
+import signal
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -35,12 +38,14 @@ from typing import Any
 
 import pandas as pd
 
-from vgs.config import ExperimentConfig, same_config, to_dict
-from vgs.errors import ConfigError
+from vgs.config import ExperimentConfig, to_dict
+from vgs.errors import ConfigError, CorruptFileError
 from vgs.experiments.evaluate import EvalSpec, evaluate_many, summarize
 from vgs.experiments.layout import eval_jobs, train_runs
 from vgs.experiments.report import build_report
 from vgs.experiments.train import git_revision, train
+from vgs.runfolder import check_request, locked, read_json, read_table, write_json
+from vgs.validate import check_config
 
 
 def machine() -> str:
@@ -50,6 +55,11 @@ def machine() -> str:
     gpu = torch.cuda.get_device_name(0) if torch.cuda.is_available() else "no GPU"
     return (f"{platform.node()} ({platform.machine()}, {os.cpu_count()} CPU cores, {gpu}, "
             f"Python {platform.python_version()}, torch {torch.__version__})")
+
+
+def _ignore_sigint() -> None:
+    """Ctrl-C reaches the whole process group: the parent handles it (and stops the pool)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _train_job(args: tuple[ExperimentConfig, str, str, bool, int, int]) -> str:
@@ -76,31 +86,40 @@ class Reproduction:
     def __init__(self, cfg: ExperimentConfig, out: Path, workers: int | None = None,
                  backend: str = "local", ray_address: str | None = None,
                  progress: bool = True) -> None:
+        cfg = check_config(cfg)  # before anything is written
         self.cfg = cfg
         self.out = out
         self.workers = (os.cpu_count() or 1) if workers is None else workers
-        if self.workers < 1:
-            raise ConfigError("workers", f"must be >= 1, got {self.workers}")
+        if isinstance(self.workers, bool) or not isinstance(self.workers, int) \
+                or self.workers < 1:
+            raise ConfigError("workers", f"must be an integer >= 1, got {self.workers!r}")
+        if out.exists() and not out.is_dir():
+            raise ConfigError("out", f"{out} is a file, not a folder")
         self.backend = backend
         self.ray_address = ray_address
         self.progress = progress
-        out.mkdir(parents=True, exist_ok=True)
         self.meta_path = out / "reproduce.json"
         self.meta: dict[str, Any] = {}
-        if self.meta_path.exists():
-            self.meta = json.loads(self.meta_path.read_text())
-            if not same_config(self.meta.get("config"), cfg):
-                raise ConfigError("out", f"{out} holds a reproduction with another "
-                                         "configuration; use a new folder or the same flags")
-        self.meta.update({"profile": cfg.name, "config": to_dict(cfg), "machine": machine(),
-                          "git_revision": git_revision(),
-                          "command": "vgs " + shlex.join(sys.argv[1:])
-                          if sys.argv and sys.argv[0].endswith("vgs") else None})
-        self.meta.setdefault("stage_wall_s", {})
-        self._save()
+        with self.locked():
+            if self.meta_path.exists():
+                self.meta = read_json(self.meta_path)
+                if not isinstance(self.meta.get("config"), dict):
+                    raise CorruptFileError(self.meta_path, "records no configuration")
+                check_request(self.meta["config"], cfg, self.meta_path,
+                              extendable=("eval.episodes",))
+            self.meta.update({"profile": cfg.name, "config": to_dict(cfg),
+                              "machine": machine(), "git_revision": git_revision(),
+                              "command": "vgs " + shlex.join(sys.argv[1:])
+                              if sys.argv and sys.argv[0].endswith("vgs") else None})
+            self.meta.setdefault("stage_wall_s", {})
+            self._save()
+
+    def locked(self) -> Any:
+        """The folder's lock (:func:`vgs.runfolder.locked`), held by every stage."""
+        return locked(self.out)
 
     def _save(self) -> None:
-        self.meta_path.write_text(json.dumps(self.meta, indent=2))
+        write_json(self.meta_path, self.meta)
 
     def _stage(self, name: str, t0: float) -> None:
         walls = self.meta["stage_wall_s"]
@@ -111,7 +130,7 @@ class Reproduction:
         """(mode, seed, folder) of every training run."""
         return [(run.mode, run.seed, run.folder) for run in train_runs(self.cfg, self.out)]
 
-    def train(self) -> None:
+    def _train_unlocked(self) -> None:
         """Stage 1: train (or resume) every run; runs go side by side over the workers."""
         t0 = time.perf_counter()
         jobs = []
@@ -126,7 +145,8 @@ class Reproduction:
             for job in jobs:
                 _train_job(job)
         elif jobs:
-            with ProcessPoolExecutor(parallel, mp_context=mp.get_context("spawn")) as pool:
+            with ProcessPoolExecutor(parallel, mp_context=mp.get_context("spawn"),
+                                     initializer=_ignore_sigint) as pool:
                 list(pool.map(_train_job, jobs))
         self._stage("train", t0)
 
@@ -134,9 +154,12 @@ class Reproduction:
         table = folder / "episodes.csv"
         if not table.exists() or not (folder / "convergence.json").exists():
             return False
-        return len(pd.read_csv(table)) >= self.cfg.train.episodes
+        try:
+            return len(pd.read_csv(table)) >= self.cfg.train.episodes
+        except (ValueError, UnicodeDecodeError):  # unreadable: train() says what is wrong
+            return False
 
-    def evaluate(self) -> None:
+    def _evaluate_unlocked(self) -> None:
         """Stage 2: every policy on every condition.
 
         Raises:
@@ -162,18 +185,20 @@ class Reproduction:
     def _merge(self, label: str, condition: str) -> None:
         """``eval/<label>/<condition>/episodes.parquet``: the tables of all training seeds."""
         parts = sorted((self.out / "eval" / label).glob(f"s*/{condition}/episodes.parquet"))
-        df = pd.concat([pd.read_parquet(p).assign(train_run=p.parent.parent.name)
+        df = pd.concat([read_table(p).assign(train_run=p.parent.parent.name)
                         for p in parts], ignore_index=True)
         if len(parts) > 1:  # several training seeds: keep the index unique per seed
             df["index"] = range(len(df))
         dest = self.out / "eval" / label / condition
         dest.mkdir(parents=True, exist_ok=True)
-        df.to_parquet(dest / "episodes.parquet", index=False)
-        df.to_csv(dest / "episodes.csv", index=False)
-        (dest / "summary.json").write_text(json.dumps(
-            {"policy": label, "condition": condition, **summarize(df)}, indent=2))
+        for name, write in (("episodes.parquet", df.to_parquet), ("episodes.csv", df.to_csv)):
+            tmp = dest / f".{name}.tmp"
+            write(tmp, index=False)
+            os.replace(tmp, dest / name)
+        write_json(dest / "summary.json", {"policy": label, "condition": condition,
+                                           **summarize(df)})
 
-    def sweep(self) -> None:
+    def _sweep_unlocked(self) -> None:
         """Stage 3: the grasp-position sweep (skipped when done or disabled)."""
         r = self.cfg.reproduce
         folder = self.out / "sweep"
@@ -187,7 +212,7 @@ class Reproduction:
         sweep_to_folder(self.cfg, spec, folder, workers=self.workers, progress=self.progress)
         self._stage("sweep", t0)
 
-    def report(self) -> Path:
+    def _report_unlocked(self) -> Path:
         """Stage 4: the report."""
         t0 = time.perf_counter()
         self.meta["finished"] = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
@@ -195,6 +220,26 @@ class Reproduction:
         path = build_report(self.out, title=f"VGS reproduction report ({self.cfg.name} profile)")
         self._stage("report", t0)
         return path
+
+    def train(self) -> None:
+        """Stage 1 (:meth:`_train_unlocked`) with the folder locked."""
+        with self.locked():
+            self._train_unlocked()
+
+    def evaluate(self) -> None:
+        """Stage 2 (:meth:`_evaluate_unlocked`) with the folder locked."""
+        with self.locked():
+            self._evaluate_unlocked()
+
+    def sweep(self) -> None:
+        """Stage 3 (:meth:`_sweep_unlocked`) with the folder locked."""
+        with self.locked():
+            self._sweep_unlocked()
+
+    def report(self) -> Path:
+        """Stage 4 (:meth:`_report_unlocked`) with the folder locked."""
+        with self.locked():
+            return self._report_unlocked()
 
     def run(self) -> Path:
         """All stages; returns the report's path."""

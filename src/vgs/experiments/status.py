@@ -1,9 +1,13 @@
 """``vgs status DIR``: how far a reproduction, training run or evaluation has got.
 
 Reads only the files the runs write as they go (``episodes.csv`` of a training run, the
-``journal.jsonl`` of an evaluation, ``reproduce.json``), never a checkpoint, so it is instant and
-safe to call while the run is working. It cannot tell a running job from a stopped one; it says
-when each folder was last written.
+``journal.jsonl`` of an evaluation, ``reproduce.json``) and the metadata of a checkpoint
+(:func:`vgs.checkpoint.read_meta`: its CRCs are checked, nothing in it is unpickled and torch is
+not imported), so it is quick and safe to call while the run is working. A checkpoint that is
+not in vgs's pickle-free format or is damaged, and a journal line that is not an episode row,
+are refused with one line. It cannot tell a running job from a stopped one; it says when each
+folder was last written. When one job's episodes come from several hosts (CPU model, MuJoCo
+version), it says so.
 
 Rates are per process: a training run is one process; an evaluation's ``s/episode`` is the
 mean wall time of one episode in one worker, so N workers finish about N episodes in that time.
@@ -12,14 +16,16 @@ mean wall time of one episode in one worker, so N workers finish about N episode
 from __future__ import annotations
 
 import csv
-import json
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from vgs import checkpoint
 from vgs.config import ExperimentConfig, from_dict
-from vgs.errors import ConfigError
+from vgs.errors import ConfigError, CorruptFileError
+from vgs.experiments.journal import read_journal
 from vgs.experiments.layout import eval_jobs, train_runs
+from vgs.runfolder import hosts_of, read_json
 
 RATE_WINDOW = 50  # episodes behind a rate
 
@@ -100,27 +106,40 @@ def train_progress(folder: Path, name: str | None = None) -> Progress:
         if folder.exists():
             return Progress(name, 0, 0, False, None, None, "no run.json")
         raise ConfigError("dir", f"{folder} does not exist")
-    cfg = from_dict(ExperimentConfig, json.loads(meta_path.read_text())["config"])
+    meta = read_json(meta_path)
+    cfg = _config(meta_path, meta.get("config"))
     total = cfg.train.episodes
     rows: list[dict[str, str]] = []
     if table.exists():
-        with table.open(newline="") as fh:
-            rows = list(csv.DictReader(fh))
+        try:
+            with table.open(newline="", encoding="utf-8") as fh:
+                rows = [r for r in csv.DictReader(fh) if r.get("wall_s") is not None]
+        except (UnicodeDecodeError, csv.Error) as exc:
+            raise CorruptFileError(table, f"cannot be read ({exc})") from None
+    ckpt = folder / "checkpoint.pt"
+    saved = checkpoint.read_meta(ckpt) if ckpt.exists() else None  # refuses a bad one
+    at = int(saved.get("episode", 0)) if saved else 0
     done = len(rows)
-    finished = (folder / "convergence.json").exists() and done >= total
-    walls = [float(r["wall_s"]) for r in rows[-RATE_WINDOW:] if r.get("wall_s")]
+    # (a published copy keeps no checkpoint: its table tells)
+    finished = (folder / "convergence.json").exists() and done >= total and (
+        saved is None or at >= total)
+    walls = [_number(r.get("wall_s")) for r in rows[-RATE_WINDOW:]]
+    walls = [w for w in walls if w is not None]
     notes = []
     if not finished and done:
-        every = cfg.train.checkpoint_every
-        notes.append(f"a restart resumes at episode {done - done % every}"
-                     if (folder / "checkpoint.pt").exists() else "no checkpoint yet")
+        notes.append(f"a restart resumes at episode {at}" if saved else "no checkpoint yet")
         if done < cfg.agent.random_episodes:
             notes.append(f"random exploration until episode {cfg.agent.random_episodes} "
                          "(the episodes after it also run the forward pass: slower)")
+    hosts = meta.get("hosts") if isinstance(meta.get("hosts"), list) else []
+    if len(hosts) > 1:
+        names = hosts_of(hosts)
+        notes.append(f"trained on {len(hosts)} hosts ({'; '.join(names)}): the same scene can "
+                     "end differently on another CPU")
     if rows:
         window = rows[-RATE_WINDOW:]
-        grasp = sum(int(r["grasp_success"]) for r in window) / len(window)
-        ok = sum(int(r["assembly_success"]) for r in window) / len(window)
+        grasp = sum(_flag(r.get("grasp_success")) for r in window) / len(window)
+        ok = sum(_flag(r.get("assembly_success")) for r in window) / len(window)
         notes.append(f"last {len(window)}: grasp {grasp:.2f}, assembly {ok:.2f}")
     last = _age(table, meta_path, folder / "checkpoint.pt") if rows else None
     return Progress(name, done, total, finished, _mean(walls), last, "; ".join(notes))
@@ -137,26 +156,54 @@ def eval_progress(folder: Path, name: str | None = None, total: int | None = Non
     name = name or folder.name
     meta_path, journal = folder / "meta.json", folder / "journal.jsonl"
     if meta_path.exists():
-        total = int(json.loads(meta_path.read_text())["episodes"])
-    rows = []
-    if journal.exists():
-        for text in journal.read_text().splitlines():
-            try:
-                rows.append(json.loads(text))
-            except json.JSONDecodeError:  # a line cut short by a kill
-                continue
-    done = len({int(r["index"]) for r in rows})
+        episodes = read_json(meta_path).get("episodes")
+        if isinstance(episodes, bool) or not isinstance(episodes, int):
+            raise CorruptFileError(meta_path, f"records {episodes!r} episodes")
+        total = episodes
+    by_index, _ = read_journal(journal)  # a line cut by a running writer is skipped
+    rows = [by_index[i] for i in sorted(by_index)]
+    done = len(rows)
     summary = folder / "summary.json"
     finished = summary.exists() and total is not None and done >= total
-    note = ""
+    notes = []
+    if not meta_path.exists() and journal.exists():
+        notes.append("no meta.json: the planned number of episodes is unknown (a resume with "
+                     "the same command checks every row and writes it again)")
     if rows:
         ok = sum(bool(r["success"]) for r in rows)
-        note = f"assembled {ok}/{len(rows)}"
+        notes.append(f"assembled {ok}/{len(rows)}")
         if not finished and total is not None and done >= total:
-            note += "; all episodes in, tables written when the evaluation ends"
-    walls = [float(r["wall_s"]) for r in rows[-RATE_WINDOW:] if r.get("wall_s") is not None]
+            notes.append("all episodes in, tables written when the evaluation ends")
+    hosts = hosts_of(rows)
+    if len(hosts) > 1:
+        notes.append(f"episodes from {len(hosts)} hosts ({'; '.join(hosts)}): the same scene "
+                     "can end differently on another CPU")
+    walls = [_number(r.get("wall_s")) for r in rows[-RATE_WINDOW:]]
+    walls = [w for w in walls if w is not None]
     last = _age(journal, meta_path) if (rows or meta_path.exists()) else None
-    return Progress(name, done, total or 0, finished, _mean(walls), last, note)
+    return Progress(name, done, total or 0, finished, _mean(walls), last, "; ".join(notes))
+
+
+def _config(path: Path, data: object) -> ExperimentConfig:
+    try:
+        return from_dict(ExperimentConfig, data)  # type: ignore[arg-type]
+    except (TypeError, ValueError, AttributeError) as exc:
+        raise CorruptFileError(path, f"records no usable configuration ({exc})") from None
+
+
+def _number(value: object) -> float | None:
+    try:
+        number = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return None
+    return number if number == number else None
+
+
+def _flag(value: object) -> int:
+    try:
+        return int(float(value))  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return 0
 
 
 def folder_status(path: Path) -> list[tuple[str, list[Progress]]]:
@@ -172,8 +219,8 @@ def folder_status(path: Path) -> list[tuple[str, list[Progress]]]:
     if not path.is_dir():
         raise ConfigError("dir", f"{path} is not a folder")
     if (path / "reproduce.json").exists():
-        meta = json.loads((path / "reproduce.json").read_text())
-        cfg = from_dict(ExperimentConfig, meta["config"])
+        meta = read_json(path / "reproduce.json")
+        cfg = _config(path / "reproduce.json", meta.get("config"))
         train = [train_progress(run.folder, str(run.folder.relative_to(path)))
                  for run in train_runs(cfg, path)]
         evaluate = [eval_progress(job.folder, str(job.folder.relative_to(path)),
@@ -199,7 +246,7 @@ def format_status(path: Path) -> str:
     """The text ``vgs status`` prints."""
     lines = [f"{path}"]
     if (path / "reproduce.json").exists():
-        meta = json.loads((path / "reproduce.json").read_text())
+        meta = read_json(path / "reproduce.json")
         walls = ", ".join(f"{k} {v / 3600:.2f} h" for k, v in meta.get("stage_wall_s", {}).items())
         lines[0] += (f": {meta.get('profile')} profile, commit "
                      f"{str(meta.get('git_revision') or '?')[:7]}")

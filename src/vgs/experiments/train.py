@@ -22,15 +22,20 @@ Threshold: ``reward.threshold_s`` if given; otherwise, during the random-explora
 running ``threshold_percentile`` of the successful assembly times seen so far, frozen at the end
 of that phase and written to ``threshold.json``.
 
-Resume: a run started again with the same ``--out`` loads ``checkpoint.pt`` (both networks,
-optimiser, replay, RNG states, threshold, episode counter), drops the rows of ``episodes.csv``
-written after that checkpoint, and continues.
+Resume: a run started again with the same ``--out`` compares the request with ``run.json``
+(any difference but a larger ``train.episodes`` is refused, naming the field), loads
+``checkpoint.pt`` (both networks, optimiser, replay, RNG states, threshold, episode counter;
+pickle-free, :mod:`vgs.checkpoint`), checks the rows of ``episodes.csv`` against the plan (episode
+numbers and seeds), drops the rows written after that checkpoint, and continues. A larger
+``train.episodes`` extends the run: the epsilon schedule stays the one of the first request
+(``schedule_episodes`` in ``run.json``), so the episodes already run keep their meaning and the
+extra ones act at the final epsilon. The folder is locked (:func:`vgs.runfolder.locked`) while
+the run works.
 """
 
 from __future__ import annotations
 
 import csv
-import json
 import math
 import multiprocessing as mp
 import os
@@ -46,16 +51,25 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
+from vgs import checkpoint
 from vgs.assembly.episode import EpisodeRunner, GraspCommand
 from vgs.assembly.record import EpisodeRecord
-from vgs.config import ExperimentConfig, from_dict, to_dict
-from vgs.errors import ConfigError, VGSError
+from vgs.config import ExperimentConfig, to_dict
+from vgs.errors import (
+    CheckpointError,
+    ConfigError,
+    CorruptFileError,
+    RunMismatchError,
+    VGSError,
+)
 from vgs.experiments.policies import pixel_command
 from vgs.grasping.agent import DeltaQMonitor, GraspAction, GraspAgent
 from vgs.grasping.preprocess import peg_mask
 from vgs.grasping.replay import ReplayBuffer, Transition
 from vgs.grasping.rewards import MODES, derive_threshold, grasp_reward
+from vgs.runfolder import check_request, host, locked, read_json, write_json
 from vgs.sim.camera import Heightmap
+from vgs.validate import check_config
 
 CSV_COLUMNS = (
     "episode", "mode", "seed", "epsilon", "explored", "rotation", "row", "col", "q_value",
@@ -100,20 +114,82 @@ class TrainState:
     threshold: float | None = None
     exploration_times: list[float] | None = None
     rng_state: dict[str, Any] | None = None
+    table_sha256: str | None = None
 
 
-def _open_csv(path: Path, start_episode: int) -> Any:
-    """Append-only per-episode table; rows after the checkpoint are dropped on resume."""
-    rows: list[dict[str, str]] = []
-    if path.exists():
-        with path.open(newline="") as f:
-            rows = [r for r in csv.DictReader(f) if int(r["episode"]) < start_episode]
-    f = path.open("w", newline="")
-    writer = csv.DictWriter(f, fieldnames=CSV_COLUMNS)
-    writer.writeheader()
-    writer.writerows(rows)
-    f.flush()
-    return f, writer
+def read_rows(path: Path, cfg: ExperimentConfig, mode: str, keep: int,
+              digest: str | None = None) -> list[str]:
+    """The header and the rows of ``episodes.csv`` before episode ``keep`` (the checkpoint's),
+    checked, as the lines of the file.
+
+    Each kept row must be episode 0, 1, ... in order, of this mode and with the episode's
+    planned seed, and the kept lines must hash to ``digest`` (SHA-256 recorded by the
+    checkpoint), so a row changed after its checkpoint is caught. Rows from ``keep`` on were
+    written after the checkpoint and are dropped (a line cut short by a kill is among them).
+
+    Raises:
+        CorruptFileError: Naming the file and line of an unreadable or foreign row, or when
+            fewer rows than the checkpoint's episode count are left or they were changed.
+    """
+    header = ",".join(CSV_COLUMNS) + "\r\n"
+    if not path.exists():
+        if keep:
+            raise CorruptFileError(path, f"is missing but the checkpoint is at episode {keep}; "
+                                         "restore it or train again into a new folder")
+        return [header]
+    data = path.read_bytes()
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data[:exc.start].count(b"\n") + 1
+        raise CorruptFileError(path, "is not UTF-8 text", line=line) from None
+    lines = text.splitlines(keepends=True)
+    if not lines:
+        if keep:
+            raise CorruptFileError(path, f"is empty but the checkpoint is at episode {keep}")
+        return [header]
+    if lines[0].rstrip("\r\n") != header.rstrip("\r\n"):
+        raise CorruptFileError(path, "is not vgs's training table header", line=1)
+    for number, line in enumerate(lines[1:keep + 1], start=2):
+        want = number - 2
+        fields = next(csv.reader([line]), [])
+        if len(fields) != len(CSV_COLUMNS) or not line.endswith("\n"):
+            raise CorruptFileError(path, "is not a row of this table", line=number)
+        record = dict(zip(CSV_COLUMNS, fields, strict=True))
+        try:
+            episode, seed = int(record["episode"]), int(record["seed"])
+        except ValueError:
+            raise CorruptFileError(path, "is not a row of this table", line=number) from None
+        if episode != want or seed != episode_seed(cfg.seed, want) or record["mode"] != mode:
+            raise CorruptFileError(path, f"is not episode {want} of this run (episode "
+                                         f"{record['episode']}, seed {record['seed']}, mode "
+                                         f"{record['mode']}); restore the file or train again "
+                                         "into a new folder", line=number)
+    kept = lines[:keep + 1]
+    if len(kept) - 1 < keep:
+        raise CorruptFileError(path, f"holds {len(kept) - 1} rows but the checkpoint is at "
+                                     f"episode {keep}; restore it or train again into a new "
+                                     "folder")
+    if digest is not None and _sha256("".join(kept).encode("utf-8")) != digest:
+        raise CorruptFileError(path, f"rows 0-{keep - 1} differ from those the checkpoint saw; "
+                                     "restore the file or train again into a new folder")
+    return kept
+
+
+def _sha256(data: bytes) -> str:
+    import hashlib
+
+    return hashlib.sha256(data).hexdigest()
+
+
+def _open_csv(path: Path, lines: list[str]) -> Any:
+    """Append-only per-episode table, rewritten (atomically) with the checked ``lines`` first."""
+    tmp = path.with_name(f".{path.name}.tmp")
+    with tmp.open("w", newline="", encoding="utf-8") as f:
+        f.write("".join(lines))
+    os.replace(tmp, path)
+    f = path.open("a", newline="", encoding="utf-8")
+    return f, csv.DictWriter(f, fieldnames=CSV_COLUMNS)
 
 
 _COLLECTOR_RUNNER: EpisodeRunner | None = None
@@ -121,6 +197,9 @@ _COLLECTOR_RUNNER: EpisodeRunner | None = None
 
 def _init_collector(cfg: ExperimentConfig) -> None:
     global _COLLECTOR_RUNNER
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     torch.set_num_threads(1)
     _COLLECTOR_RUNNER = EpisodeRunner(cfg)
 
@@ -135,13 +214,84 @@ def _run_command(seed: int, command: GraspCommand) -> EpisodeRecord:
 
 def save_checkpoint(path: Path, agent: GraspAgent, replay: ReplayBuffer, state: TrainState,
                     monitor: DeltaQMonitor) -> None:
-    """Write atomically (temporary file, then rename): a kill never leaves half a checkpoint."""
-    tmp = path.with_suffix(".tmp")
-    torch.save({"agent": agent.state_dict(), "replay": replay.state_dict(),
-                "episode": state.episode, "threshold": state.threshold,
-                "exploration_times": state.exploration_times, "rng_state": state.rng_state,
-                "monitor": monitor.state_dict(), "torch_rng": torch.get_rng_state()}, tmp)
-    os.replace(tmp, path)
+    """Write atomically and pickle-free (:mod:`vgs.checkpoint`): a kill never leaves half a
+    checkpoint, and loading it runs no code."""
+    agent_state = agent.state_dict()
+    replay_state = replay.state_dict()
+    arrays = {k: None if v is None else torch.from_numpy(np.ascontiguousarray(v))
+              for k, v in replay_state.pop("arrays").items()}
+    tensors = {"eva_net": agent_state.pop("eva_net"), "target_net": agent_state.pop("target_net"),
+               "optimizer": agent_state.pop("optimizer"), "replay_arrays": arrays,
+               "torch_rng": torch.get_rng_state()}
+    meta = {"episode": state.episode, "threshold": state.threshold,
+            "exploration_times": state.exploration_times, "rng_state": state.rng_state,
+            "monitor": monitor.state_dict(), "agent": agent_state, "replay": replay_state,
+            "table_sha256": state.table_sha256}
+    checkpoint.save(path, tensors, meta)
+
+
+def load_checkpoint(path: Path, agent: GraspAgent, replay: ReplayBuffer | None = None,
+                    monitor: DeltaQMonitor | None = None, device: str = "cpu") -> TrainState:
+    """Restore a :func:`save_checkpoint` file into ``agent`` (and ``replay``, ``monitor``, the
+    torch RNG when given); return the counters.
+
+    Raises:
+        CheckpointError: If the file is not a vgs checkpoint, is damaged, or does not fit.
+    """
+    tensors, meta = checkpoint.load(path, map_location=device)
+    try:
+        agent.load_state_dict({**meta["agent"], "eva_net": tensors["eva_net"],
+                               "target_net": tensors["target_net"],
+                               "optimizer": tensors["optimizer"]})
+        if replay is not None:
+            arrays = {k: None if v is None else v.cpu().numpy()
+                      for k, v in tensors["replay_arrays"].items()}
+            replay.load_state_dict({**meta["replay"], "arrays": arrays})
+        if monitor is not None:
+            monitor.load_state_dict(meta["monitor"])
+            torch.set_rng_state(tensors["torch_rng"].cpu())
+        return TrainState(int(meta["episode"]), meta["threshold"], meta["exploration_times"],
+                          meta["rng_state"], meta.get("table_sha256"))
+    except ConfigError as exc:
+        raise CheckpointError(path, f"does not fit this run ({exc})") from None
+    except (KeyError, TypeError, ValueError, AttributeError, RuntimeError) as exc:
+        raise CheckpointError(path, f"is incomplete ({type(exc).__name__}: {exc})") from None
+
+
+def _check_start(cfg: ExperimentConfig, mode: str, out: Path
+                 ) -> tuple[int, dict[str, Any] | None]:
+    """Check the request against ``run.json`` without writing anything.
+
+    Returns:
+        The number of episodes the epsilon schedule spans, and the ``run.json`` to write once
+        the rest of the folder has been checked (None when it stays as it is).
+    """
+    meta_path = out / "run.json"
+    here = host()
+    if meta_path.exists():
+        meta = read_json(meta_path)
+        if meta.get("mode") != mode:
+            raise RunMismatchError("mode", f"{out} holds a {meta.get('mode')} run, not {mode}")
+        if not isinstance(meta.get("config"), dict):
+            raise CorruptFileError(meta_path, "records no configuration")
+        grown = check_request(meta["config"], cfg, meta_path, extendable=("train.episodes",))
+        schedule = int(meta.get("schedule_episodes", meta["config"].get("train", {}).get(
+            "episodes", cfg.train.episodes)))
+        hosts = meta.get("hosts") if isinstance(meta.get("hosts"), list) else []
+        if not grown and here in hosts:
+            return schedule, None
+        meta.update(config=to_dict(cfg), schedule_episodes=schedule,
+                    hosts=hosts + ([here] if here not in hosts else []))
+        return schedule, meta
+    leftovers = [n for n in ("checkpoint.pt", "episodes.csv") if (out / n).exists()]
+    if leftovers:
+        raise CorruptFileError(meta_path, f"is missing but {out} holds {', '.join(leftovers)}; "
+                                          "restore it or train into a new folder")
+    return cfg.train.episodes, {"mode": mode, "config": to_dict(cfg),
+                                "schedule_episodes": cfg.train.episodes,
+                                "git_revision": git_revision(),
+                                "python": sys.version.split()[0], "torch": torch.__version__,
+                                "hosts": [here]}
 
 
 def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
@@ -149,7 +299,8 @@ def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
     """Train (or resume) one policy; return the run directory.
 
     Args:
-        cfg: Experiment configuration (ignored on resume: the run's saved one is used).
+        cfg: Experiment configuration; on resume it must equal the one in ``run.json``, except
+            for a larger ``train.episodes`` (which extends the run).
         mode: ``vgs`` or ``baseline``.
         out: Run folder.
         progress: Show a progress bar.
@@ -157,47 +308,55 @@ def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
         position: Line of the progress bar (several runs side by side).
 
     Raises:
-        ConfigError: On an unknown mode or a run directory made with another mode.
+        ConfigError: On an unknown mode or a bad configuration (checked before anything is
+            written).
+        RunMismatchError: If ``out`` holds a run with another mode or configuration.
+        CorruptFileError: If a file of the run cannot be read or does not fit the run
+            (:class:`vgs.errors.CheckpointError` for the checkpoint).
+        FolderBusyError: If another process is working in ``out``.
     """
     if mode not in MODES:
         raise ConfigError("mode", f"must be one of {MODES}, got {mode!r}")
-    out.mkdir(parents=True, exist_ok=True)
-    meta_path = out / "run.json"
-    if meta_path.exists():
-        meta = json.loads(meta_path.read_text())
-        if meta["mode"] != mode:
-            raise ConfigError("mode", f"{out} holds a {meta['mode']} run, not {mode}")
-        cfg = from_dict(ExperimentConfig, meta["config"])  # resume with the saved config
-    else:
-        meta_path.write_text(json.dumps({"mode": mode, "config": to_dict(cfg),
-                                         "git_revision": git_revision(),
-                                         "python": sys.version.split()[0],
-                                         "torch": torch.__version__}, indent=2))
-    total = cfg.train.episodes
+    cfg = check_config(cfg)  # before anything is written
     device = resolve_device(cfg.train.device)
+    if out.exists() and not out.is_dir():
+        raise ConfigError("out", f"{out} is a file, not a folder")
+    with locked(out):
+        return _train(cfg, mode, out, device, progress, threads, position)
+
+
+def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: bool,
+           threads: int | None, position: int) -> Path:
+    # Everything is checked before anything is written: the networks can be built, the request
+    # matches run.json, the checkpoint and the table fit.
+    total = cfg.train.episodes
     torch.set_num_threads(threads or max(1, min(4, os.cpu_count() or 1)))
     agent = GraspAgent(cfg.network, cfg.agent, device=device, seed=cfg.seed)
+    schedule, new_meta = _check_start(cfg, mode, out)
     replay = ReplayBuffer(cfg.agent.replay_capacity)
     monitor = DeltaQMonitor.from_config(cfg.agent)
     state = TrainState(exploration_times=[])
     rng = np.random.default_rng([cfg.seed, 7])
     ckpt = out / "checkpoint.pt"
     if ckpt.exists():
-        saved = torch.load(ckpt, map_location=device, weights_only=False)
-        agent.load_state_dict(saved["agent"])
-        replay.load_state_dict(saved["replay"])
-        monitor.load_state_dict(saved["monitor"])
-        torch.set_rng_state(saved["torch_rng"])
-        state = TrainState(saved["episode"], saved["threshold"], saved["exploration_times"],
-                           saved["rng_state"])
-        rng.bit_generator.state = state.rng_state
+        state = load_checkpoint(ckpt, agent, replay, monitor, device)
+        try:
+            rng.bit_generator.state = state.rng_state
+        except (TypeError, ValueError, KeyError) as exc:
+            raise CheckpointError(ckpt, f"holds a bad generator state ({exc})") from None
+        if state.episode > total:
+            raise CorruptFileError(ckpt, f"is at episode {state.episode}, beyond the run's "
+                                         f"{total}")
     if cfg.reward.threshold_s is not None:
         state.threshold = cfg.reward.threshold_s
+    rows = read_rows(out / "episodes.csv", cfg, mode, state.episode, state.table_sha256)
+    if new_meta is not None:
+        write_json(out / "run.json", new_meta)
 
     from torch.utils.tensorboard import SummaryWriter
 
     writer = SummaryWriter(str(out / "tensorboard"), purge_step=state.episode)
-    csv_file, table = _open_csv(out / "episodes.csv", state.episode)
+    csv_file, table = _open_csv(out / "episodes.csv", rows)
     runner = EpisodeRunner(cfg)
     bar = tqdm(range(state.episode, total), initial=state.episode, total=total,
                desc=f"train {mode}", disable=not progress, dynamic_ncols=True,
@@ -217,7 +376,7 @@ def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
             t0 = time.perf_counter()
             if collector is None:
                 seed = episode_seed(cfg.seed, episode)
-                epsilon = agent.epsilon(episode, total)
+                epsilon = agent.epsilon(episode, schedule)
                 chosen: dict[str, Any] = {}
 
                 def policy(hm: Heightmap, epsilon: float = epsilon,
@@ -234,7 +393,7 @@ def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
                     batch_end = min(episode - episode % k_parallel + k_parallel, total)
                     for e in range(episode, batch_end):
                         seed_e = episode_seed(cfg.seed, e)
-                        eps_e = agent.epsilon(e, total)
+                        eps_e = agent.epsilon(e, schedule)
                         hm_e = runner.observe(seed_e)
                         act_e = agent.act(hm_e.color, hm_e.depth, eps_e, peg_mask(hm_e.depth),
                                           rng, skip_q_if_exploring=True)
@@ -254,9 +413,9 @@ def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
                 state.threshold = (derive_threshold(times, cfg.reward.threshold_percentile)
                                    if times else None)
                 if not exploring or episode == cfg.agent.random_episodes - 1:
-                    (out / "threshold.json").write_text(json.dumps(
-                        {"threshold_s": state.threshold, "n_times": len(times),
-                         "percentile": cfg.reward.threshold_percentile}))
+                    write_json(out / "threshold.json",
+                               {"threshold_s": state.threshold, "n_times": len(times),
+                                "percentile": cfg.reward.threshold_percentile})
             threshold = state.threshold if state.threshold is not None else math.inf
             # Before any assembly time is known no threshold exists, so no r_AM can be earned.
             reward_mode = mode if state.threshold is not None else "baseline"
@@ -313,6 +472,7 @@ def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
             state.episode = episode + 1
             if state.episode % cfg.train.checkpoint_every == 0 or state.episode == total:
                 state.rng_state = rng.bit_generator.state
+                state.table_sha256 = _sha256((out / "episodes.csv").read_bytes())
                 save_checkpoint(ckpt, agent, replay, state, monitor)
                 if not progress:  # a line per checkpoint for logs of unattended runs
                     print(f"train {mode} {out}: checkpoint at episode {state.episode}/{total}; "
@@ -326,7 +486,13 @@ def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
         writer.close()
         if collector is not None:
             collector.shutdown(cancel_futures=True)
-    (out / "convergence.json").write_text(json.dumps(
-        {"delta_q_threshold": cfg.agent.delta_q_threshold, "window": cfg.agent.delta_q_window,
-         "converged": bool(monitor.converged), "delta_q_window_mean": monitor.mean}))
+    if cfg.reward.threshold_s is None and state.episode >= cfg.agent.random_episodes:
+        # (the same content as written when the threshold froze: restores a damaged copy)
+        write_json(out / "threshold.json",
+                   {"threshold_s": state.threshold, "n_times": len(state.exploration_times),
+                    "percentile": cfg.reward.threshold_percentile})
+    write_json(out / "convergence.json",
+               {"delta_q_threshold": cfg.agent.delta_q_threshold,
+                "window": cfg.agent.delta_q_window, "converged": bool(monitor.converged),
+                "delta_q_window_mean": monitor.mean})
     return out

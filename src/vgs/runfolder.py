@@ -1,0 +1,201 @@
+"""What every run folder (training run, evaluation, reproduction) shares: a lock, atomic JSON
+metadata, checked reading of JSON files, the comparison of a request with the recorded
+configuration, and the host a row was computed on.
+
+Torch-free: ``vgs status`` uses it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import fcntl
+import functools
+import json
+import os
+import platform
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+from vgs.checkpoint import atomic_write_text
+from vgs.errors import CorruptFileError, FolderBusyError, RunMismatchError
+
+LOCK_NAME = ".lock"
+
+
+@contextlib.contextmanager
+def locked(folder: Path) -> Iterator[None]:
+    """Hold ``folder/.lock`` (``fcntl.flock``, exclusive) while the block runs.
+
+    The kernel drops the lock when the process ends, however it ends, so a killed run never
+    leaves a stale lock behind.
+
+    Raises:
+        FolderBusyError: If another process holds it.
+    """
+    folder.mkdir(parents=True, exist_ok=True)
+    fd = os.open(folder / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+                raise FolderBusyError(f"{folder} is in use by another vgs process (lock "
+                                      f"{folder / LOCK_NAME}); wait for it or use another "
+                                      "folder") from None
+            raise
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{os.getpid()}\n".encode())
+        yield
+    finally:
+        os.close(fd)  # releases the lock
+
+
+def read_json(path: Path, kind: type = dict) -> Any:
+    """The JSON document in ``path``, which must be a ``kind``.
+
+    Raises:
+        CorruptFileError: If it is empty, not UTF-8, not JSON or not a ``kind``.
+    """
+    try:
+        data = json.loads(path.read_bytes().decode("utf-8"))
+    except UnicodeDecodeError:
+        raise CorruptFileError(path, "is not UTF-8 text") from None
+    except json.JSONDecodeError as exc:
+        what = "is empty" if not path.read_bytes().strip() else f"is not JSON ({exc.msg}, line " \
+                                                                 f"{exc.lineno})"
+        raise CorruptFileError(path, f"{what}; restore it or use a new folder") from None
+    if not isinstance(data, kind):
+        raise CorruptFileError(path, f"holds a {type(data).__name__}, not a "
+                                     f"{kind.__name__}")
+    return data
+
+
+def write_json(path: Path, data: Any) -> None:
+    """Write ``data`` as JSON to ``path`` atomically (temporary file, then ``os.replace``)."""
+    atomic_write_text(path, json.dumps(data, indent=2))
+
+
+def check_request(saved: dict[str, Any], cfg: Any, where: Path,
+                  extendable: tuple[str, ...] = ()) -> list[str]:
+    """Compare the configuration recorded in a run folder with the one requested.
+
+    Fields added to vgs since the folder was written take their defaults. A field in
+    ``extendable`` (dotted paths such as ``train.episodes``) may grow: those that did are
+    returned; any other difference, or one of them shrinking, is refused.
+
+    Raises:
+        RunMismatchError: Naming the first field that differs.
+        CorruptFileError: If the recorded configuration cannot be read by this vgs.
+    """
+    from vgs.config import from_dict, to_dict
+    from vgs.errors import VGSError
+    from vgs.validate import config_differences
+
+    try:
+        saved_cfg = from_dict(type(cfg), saved)
+    except (TypeError, ValueError, VGSError) as exc:
+        raise CorruptFileError(where, f"records a configuration this vgs cannot read ({exc})") \
+            from None
+    old, new = to_dict(saved_cfg), to_dict(cfg)
+    unknown = _unknown(saved, old)
+    if unknown:
+        raise RunMismatchError(unknown, f"{where} records a field this vgs does not know "
+                                        "(written by another version); use a new folder")
+    grown = []
+    for path in config_differences(old, new):
+        if path in extendable:
+            a, b = _get(old, path), _get(new, path)
+            if isinstance(a, int) and isinstance(b, int) and b > a:
+                grown.append(path)
+                continue
+            raise RunMismatchError(path, f"{where} was made with another configuration ({a!r}, "
+                                         f"not {b!r}); this field can only grow (to extend the "
+                                         "run); use a new folder otherwise")
+        raise RunMismatchError(path, f"{where} was made with another configuration "
+                                     f"({_get(old, path)!r}, not {_get(new, path)!r}); repeat "
+                                     "the run's settings to resume it, or use a new folder")
+    return grown
+
+
+def _unknown(saved: dict[str, Any], known: dict[str, Any], prefix: str = "") -> str | None:
+    """The first dotted path in ``saved`` that ``known`` lacks, or None."""
+    for key, value in saved.items():
+        if key not in known:
+            return f"{prefix}{key}"
+        if isinstance(value, dict) and isinstance(known[key], dict):
+            found = _unknown(value, known[key], f"{prefix}{key}.")
+            if found:
+                return found
+    return None
+
+
+def _get(d: dict[str, Any], path: str) -> Any:
+    for name in path.split("."):
+        d = d.get(name, "<absent>") if isinstance(d, dict) else "<absent>"
+    return d
+
+
+@functools.cache
+def host() -> dict[str, str]:
+    """``{"host_cpu": CPU model, "mujoco_version": ...}`` of this machine (cached).
+
+    The CPU model comes from ``/proc/cpuinfo`` (``model name``), else ``platform.processor()``.
+    MuJoCo's floating point differs between CPUs, so the same scene can end differently on two
+    hosts; rows carry these fields so that mixed runs show.
+    """
+    cpu = ""
+    try:
+        for line in Path("/proc/cpuinfo").read_text(errors="replace").splitlines():
+            if line.lower().startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    cpu = cpu or platform.processor() or platform.machine() or "unknown"
+    try:
+        import mujoco
+
+        version = str(mujoco.__version__)
+    except ImportError:  # pragma: no cover - mujoco is a dependency
+        version = "unknown"
+    return {"host_cpu": " ".join(cpu.split()), "mujoco_version": version}
+
+
+def hosts_of(rows: Any) -> list[str]:
+    """Distinct ``"CPU, MuJoCo version"`` of rows (dicts) that record them, in first-seen order;
+    rows written before hosts were recorded count as ``"unrecorded"`` when others record one."""
+    seen: dict[str, None] = {}
+    for row in rows:
+        cpu, version = row.get("host_cpu"), row.get("mujoco_version")
+        if _missing(cpu):
+            seen.setdefault("unrecorded", None)
+        else:
+            seen.setdefault(f"{cpu}, MuJoCo {version}", None)
+    names = list(seen)
+    return [] if names == ["unrecorded"] else names
+
+
+def _missing(value: Any) -> bool:
+    return value is None or (isinstance(value, float) and value != value) or value == ""
+
+
+def read_table(path: Path) -> Any:
+    """A results table (``.parquet`` or ``.csv``) as a pandas DataFrame.
+
+    Raises:
+        CorruptFileError: If the file cannot be parsed (truncated, not a table, not UTF-8).
+    """
+    import pandas as pd
+
+    try:
+        if path.suffix == ".parquet":
+            return pd.read_parquet(path)
+        return pd.read_csv(path)
+    except OSError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - pandas and pyarrow raise many kinds
+        first = " ".join(str(exc).split())[:160]
+        raise CorruptFileError(path, f"is not a readable table ({type(exc).__name__}: "
+                                     f"{first})") from None

@@ -1,0 +1,214 @@
+"""Fault injection: training and evaluation killed at random points (SIGKILL from outside),
+every file a run keeps damaged in several ways, then resumed. After each resume the table must
+be the one an uninterrupted run writes, or the command must refuse with one line (exit 2).
+
+The physics is :class:`experiments.fakes.FakeRunner` (milliseconds per episode), so the test
+exercises journals, checkpoints, locks and refusals, not the cell; it runs in the normal suite
+in well under a minute.
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import os
+import random
+import shutil
+import signal
+import time
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from vgs.cli import main
+from vgs.experiments.evaluate import EvalSpec, evaluate
+from vgs.experiments.train import train
+
+from . import fakes
+
+VOLATILE = ["wall_s"]
+EVAL_SEED = 7
+TRIALS = 4  # kills of each kind
+
+
+def train_table(run: Path) -> pd.DataFrame:
+    return pd.read_csv(run / "episodes.csv").drop(columns=VOLATILE)
+
+
+def eval_table(out: Path) -> pd.DataFrame:
+    return pd.read_parquet(out / "episodes.parquet").drop(columns=VOLATILE)
+
+
+def _train(out: Path) -> None:
+    train(fakes.tiny_config(), "vgs", out, progress=False, threads=1)
+
+
+def _evaluate(out: Path) -> None:
+    evaluate(fakes.tiny_config(), EvalSpec("random", "mass", 8, seed=EVAL_SEED), out,
+             workers=1, progress=False)
+
+
+def _child(kind: str, out: str, delay: float) -> None:
+    """Body of a process that is killed from outside."""
+    fakes.install(delay)
+    (_train if kind == "train" else _evaluate)(Path(out))
+
+
+@pytest.fixture(scope="module")
+def fake_physics():
+    from vgs.experiments import evaluate as evaluate_mod
+    from vgs.experiments import train as train_mod
+
+    saved = train_mod.EpisodeRunner, evaluate_mod.EpisodeRunner
+    fakes.install()
+    yield
+    train_mod.EpisodeRunner, evaluate_mod.EpisodeRunner = saved
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory: pytest.TempPathFactory, fake_physics) -> dict[str, Path]:
+    """Uninterrupted runs: a training run and an evaluation."""
+    root = tmp_path_factory.mktemp("reference")
+    _train(root / "train")
+    _evaluate(root / "eval")
+    return {"train": root / "train", "eval": root / "eval"}
+
+
+def _tables_equal(kind: str, out: Path, ref: Path) -> None:
+    if kind == "train":
+        pd.testing.assert_frame_equal(train_table(out), train_table(ref))
+    else:
+        pd.testing.assert_frame_equal(eval_table(out), eval_table(ref))
+
+
+def test_killed_runs_resume_to_the_uninterrupted_table(tmp_path: Path, reference) -> None:
+    """SIGKILL at a random moment (mid-episode, mid-write, mid-checkpoint ...), then resume."""
+    ctx = mp.get_context("forkserver")
+    ctx.set_forkserver_preload(["experiments.fakes", "vgs.experiments.train",
+                                "vgs.experiments.evaluate", "torch.utils.tensorboard"])
+    rnd = random.Random(20261202)
+    # How long each whole run takes in a child here (train: 6 episodes; evaluate: 8): the kills
+    # are drawn over that span. (The first child also starts the fork server.)
+    spans = {}
+    for kind in ("train", "eval", "train"):
+        proc = ctx.Process(target=_child, args=(kind, str(tmp_path / f"calibrate_{kind}"), 0.03))
+        t0 = time.perf_counter()
+        proc.start()
+        proc.join(60)
+        assert proc.exitcode == 0
+        spans[kind] = time.perf_counter() - t0
+        shutil.rmtree(tmp_path / f"calibrate_{kind}")
+    killed = partial = 0
+    for trial in range(TRIALS):
+        for kind in ("train", "eval"):
+            out = tmp_path / f"{kind}{trial}"
+            proc = ctx.Process(target=_child, args=(kind, str(out), 0.03))
+            proc.start()
+            time.sleep(rnd.uniform(0.02, 0.95 * spans[kind]))
+            if proc.is_alive():
+                os.kill(proc.pid, signal.SIGKILL)
+                killed += 1
+            proc.join(30)
+            assert proc.exitcode is not None
+            table = out / ("episodes.csv" if kind == "train" else "journal.jsonl")
+            if table.exists() and 0 < len(table.read_bytes().splitlines()) - (
+                    kind == "train") < (6 if kind == "train" else 8):
+                partial += 1  # killed half-way through the episodes
+            (_train if kind == "train" else _evaluate)(out)  # resume
+            _tables_equal(kind, out, reference[kind])
+    assert killed >= TRIALS and partial >= 2, (killed, partial)  # kills landed inside runs
+
+
+def test_kill_inside_writes_resumes_to_the_uninterrupted_table(tmp_path: Path,
+                                                              reference) -> None:
+    """The states a kill can leave inside a write: a journal line or table row cut at any byte,
+    temporary files of an atomic write left behind."""
+    rnd = random.Random(5)
+    journal = (reference["eval"] / "journal.jsonl").read_bytes()
+    for trial in range(TRIALS):
+        out = tmp_path / f"eval{trial}"
+        shutil.copytree(reference["eval"], out)
+        for name in ("episodes.parquet", "episodes.csv", "summary.json"):
+            (out / name).unlink()
+        cut = rnd.randrange(1, len(journal))
+        (out / "journal.jsonl").write_bytes(journal[:cut])
+        (out / ".meta.json.tmp").write_bytes(b'{"half')
+        (out / ".episodes.parquet.tmp").write_bytes(b"PAR1\x00")
+        _evaluate(out)
+        _tables_equal("eval", out, reference["eval"])
+    for trial in range(2):
+        out = tmp_path / f"train{trial}"
+        shutil.copytree(reference["train"], out)
+        (out / ".checkpoint.pt.tmp").write_bytes(os.urandom(100))
+        with (out / "episodes.csv").open("ab") as fh:  # a row cut after the last checkpoint
+            fh.write(b"6,vgs,123" if trial else b"6")
+        _train(out)
+        _tables_equal("train", out, reference["train"])
+
+
+CORRUPTIONS = ("delete", "empty", "truncate", "garbage", "flip", "duplicate_line")
+
+
+def _corrupt(path: Path, how: str, rnd: random.Random) -> None:
+    data = path.read_bytes()
+    if how == "delete":
+        path.unlink()
+    elif how == "empty":
+        path.write_bytes(b"")
+    elif how == "truncate":
+        path.write_bytes(data[:len(data) // 2])
+    elif how == "garbage":
+        path.write_bytes(b"\xff\xfe\x00garbage\x80\n" + data[: len(data) // 3])
+    elif how == "flip":
+        if data:
+            i = rnd.randrange(len(data))
+            path.write_bytes(data[:i] + bytes([data[i] ^ 0x5A]) + data[i + 1:])
+    elif how == "duplicate_line":
+        lines = data.splitlines(keepends=True)
+        path.write_bytes(data + (lines[-1] if lines else b"x\n"))
+
+
+def _files(folder: Path) -> list[Path]:
+    return sorted(p for p in folder.rglob("*") if p.is_file())
+
+
+def _resume_cli(kind: str, out: Path, capsys: pytest.CaptureFixture[str]) -> int:
+    if kind == "train":
+        argv = ["train", "--mode", "vgs", "--episodes", "6", "--out", str(out), *fakes.CLI_FLAGS]
+    else:
+        argv = ["evaluate", "--policy", "random", "--condition", "mass", "--episodes", "8",
+                "--seed", str(EVAL_SEED), "--workers", "1", "--out", str(out), *fakes.CLI_FLAGS]
+    capsys.readouterr()
+    return main(argv)
+
+
+@pytest.mark.parametrize("kind", ["train", "eval"])
+def test_every_damaged_file_resumes_identically_or_is_refused_in_one_line(
+        kind: str, tmp_path: Path, reference, capsys: pytest.CaptureFixture[str],
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(os, "cpu_count", lambda: 1)  # one torch thread, as the reference
+    rnd = random.Random(kind)
+    ref = reference[kind]
+    outcomes = {"identical": 0, "refused": 0}
+    names = [p.relative_to(ref) for p in _files(ref)]
+    assert len(names) >= 5
+    for name in names:
+        for how in CORRUPTIONS:
+            out = tmp_path / f"{str(name).replace('/', '_')}-{how}"
+            shutil.copytree(ref, out)
+            _corrupt(out / name, how, rnd)
+            rc = _resume_cli(kind, out, capsys)
+            err = capsys.readouterr().err
+            if rc == 0:
+                _tables_equal(kind, out, ref)
+                outcomes["identical"] += 1
+            else:
+                lines = [line for line in err.splitlines() if not line.startswith(
+                    ("train vgs", "eval "))]  # progress lines of unattended runs
+                assert rc == 2, (name, how, err)
+                assert len(lines) == 1 and lines[0].startswith("vgs: error: "), (name, how, err)
+                assert "Traceback" not in err
+                outcomes["refused"] += 1
+            shutil.rmtree(out)
+    # Damage to the files a resume relies on is refused; the rest is rewritten.
+    assert outcomes["refused"] >= 8 and outcomes["identical"] >= 8, outcomes
