@@ -50,8 +50,8 @@ def test_loaded_as_it_is_holds_still_for_two_seconds(exported: tuple[Path, Cell]
 
 
 def test_joint_values_keep_their_meaning(exported: tuple[Path, Cell]) -> None:
-    """qpos means in the file what it means in vgs: the same joint angles put the TCP, the
-    peg's and the fingers' sites at the same places."""
+    """qpos means in the file what it means in vgs (to the 6 digits MJCF keeps): the same
+    joint angles put the TCP, flange and F/T sites and the pads at the same places."""
     path, cell = exported
     model = mujoco.MjModel.from_xml_path(str(path))
     data = mujoco.MjData(model)
@@ -65,11 +65,11 @@ def test_joint_values_keep_their_meaning(exported: tuple[Path, Cell]) -> None:
     for site in ("tcp", "flange", "ft"):
         sid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, site)
         np.testing.assert_allclose(data.site_xpos[sid], cell.data.site_xpos[
-            mujoco.mj_name2id(cell.model, mujoco.mjtObj.mjOBJ_SITE, site)], atol=1e-5)  # MJCF keeps 6 digits
+            mujoco.mj_name2id(cell.model, mujoco.mjtObj.mjOBJ_SITE, site)], atol=1e-5)
     for geom in ("pad_left", "pad_right"):
         gid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, geom)
         np.testing.assert_allclose(data.geom_xpos[gid], cell.data.geom_xpos[
-            mujoco.mj_name2id(cell.model, mujoco.mjtObj.mjOBJ_GEOM, geom)], atol=1e-5)  # MJCF keeps 6 digits
+            mujoco.mj_name2id(cell.model, mujoco.mjtObj.mjOBJ_GEOM, geom)], atol=1e-5)
 
 
 def test_servos_hold_home_at_zero_and_follow_offsets(exported: tuple[Path, Cell]) -> None:
