@@ -145,6 +145,9 @@ def cmd_demo(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     if args.video:
         check_video_name(args.video)
         headless_gl_default()
+        from vgs.render import require_gl
+
+        require_gl()  # before the episode, not after it
     result = run_demo(cfg, seed, args.offset / 1000.0)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

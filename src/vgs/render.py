@@ -56,14 +56,22 @@ def open_renderer(model: mujoco.MjModel, width: int, height: int) -> mujoco.Rend
         raise GLUnavailableError(message[:160]) from exc
 
 
+def require_gl() -> None:
+    """Make and free a tiny OpenGL context (fail early, before a long simulation).
+
+    Raises:
+        GLUnavailableError: If no OpenGL context can be made.
+    """
+    model = mujoco.MjModel.from_xml_string("<mujoco><worldbody/></mujoco>")
+    open_renderer(model, 16, 16).close()
+
+
 def gl_available() -> tuple[bool, str]:
     """Whether MuJoCo's renderer can make a context here, and the reason when it cannot."""
-    model = mujoco.MjModel.from_xml_string("<mujoco><worldbody/></mujoco>")
     try:
-        renderer = open_renderer(model, 16, 16)
+        require_gl()
     except GLUnavailableError as exc:
         return False, str(exc)
-    renderer.close()
     return True, ""
 
 
