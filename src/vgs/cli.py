@@ -1,7 +1,8 @@
-"""The ``vgs`` command: ``demo``, ``sweep``, ``export-scene``, ``model-info``, ``train``,
-``heatmap``, ``curves``, ``evaluate``, ``reproduce``, ``report`` and ``status``.
+"""The ``vgs`` command: ``demo``, ``sweep``, ``export-scene``, ``export-policy``,
+``model-info``, ``train``, ``heatmap``, ``curves``, ``evaluate``, ``reproduce``, ``report``,
+``seeds`` and ``status``.
 
-Every command but ``status`` takes ``--profile`` and configuration overrides (``--peg-mass``
+Every command but ``status``, ``seeds`` and ``export-policy`` takes ``--profile`` and configuration overrides (``--peg-mass``
 ... and the generic ``--set key=value`` with a dotted path into
 :class:`vgs.config.ExperimentConfig`). Bad input,
 whether argparse rejects it or a :class:`vgs.errors.VGSError` is raised, ends with one line
@@ -230,6 +231,17 @@ def cmd_export_scene(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     return 0
 
 
+def cmd_export_policy(args: argparse.Namespace, cfg: ExperimentConfig | None) -> int:
+    """Write a training run's network as plain weights plus a JSON description."""
+    from vgs.experiments.export_policy import export_policy
+
+    written = export_policy(Path(args.run_dir), Path(args.out))
+    print(f"wrote {written.weights} ({written.parameters} values; "
+          f"torch.load(path, weights_only=True)) and {written.description}; the plain-torch "
+          f"snippet that runs them: docs/grasping.md, 'Using a trained network without vgs'")
+    return 0
+
+
 def flag_overrides(cfg: ExperimentConfig, args: argparse.Namespace,
                    fields: dict[str, str]) -> ExperimentConfig:
     """Apply the command's own flags (``{flag name: dotted config path}``) that were given."""
@@ -450,6 +462,14 @@ def build_parser() -> argparse.ArgumentParser:
                        help="reset seed of the written default state: peg pose, hole position "
                             "(default: 0)")
     scene.set_defaults(func=cmd_export_scene)
+
+    export_pol = sub.add_parser("export-policy",
+                                help="a training run's network as plain weights (torch.load "
+                                     "weights_only) plus a JSON description")
+    export_pol.add_argument("run_dir", metavar="RUN", help="a training run folder")
+    export_pol.add_argument("--out", required=True,
+                            help="weights file (.pt); the description goes beside it (.json)")
+    export_pol.set_defaults(func=cmd_export_policy)
 
     info = sub.add_parser("model-info", parents=[common],
                           help="parameter counts and tensor shapes of the grasp network")
