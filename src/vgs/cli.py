@@ -2,9 +2,9 @@
 ``model-info``, ``train``, ``heatmap``, ``curves``, ``evaluate``, ``reproduce``, ``report``,
 ``seeds`` and ``status``.
 
-Every command but ``status``, ``seeds`` and ``export-policy`` takes ``--profile`` and configuration overrides (``--peg-mass``
-... and the generic ``--set key=value`` with a dotted path into
-:class:`vgs.config.ExperimentConfig`). Bad input,
+Every command but ``status``, ``seeds`` and ``export-policy`` takes ``--profile`` and
+configuration overrides (``--peg-mass`` ... and the generic ``--set key=value`` with a dotted
+path into :class:`vgs.config.ExperimentConfig`). Bad input,
 whether argparse rejects it or a :class:`vgs.errors.VGSError` is raised, ends with one line
 ``vgs: error: <field>: <message>`` on stderr and exit code 2.
 """
