@@ -138,17 +138,17 @@ def _float_list_mm(text: str) -> tuple[float, ...]:
 def cmd_demo(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     """One traced episode: phase table (or JSON record), DIR/demo.png and, with ``--video``, the
     episode rendered as a video."""
+    video_size = _video_size(args.video_size) if args.video else None
+    if args.video:
+        check_video_name(args.video)
+        headless_gl_default()  # before anything imports mujoco
+        from vgs.render import require_gl
+
+        require_gl()  # before the episode, not after it
     from vgs.experiments.demo import format_report, run_demo
     from vgs.experiments.plots import demo_figure
 
     seed = cfg.seed if args.seed is None else args.seed
-    video_size = _video_size(args.video_size) if args.video else None
-    if args.video:
-        check_video_name(args.video)
-        headless_gl_default()
-        from vgs.render import require_gl
-
-        require_gl()  # before the episode, not after it
     result = run_demo(cfg, seed, args.offset / 1000.0)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
