@@ -77,3 +77,38 @@ def test_demo_video_cli_and_missing_gl(tmp_path: Path) -> None:
                           cwd=tmp_path, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     assert "video" in proc.stdout and (tmp_path / "d.gif").stat().st_size > 1000
+
+
+@needs_gl
+def test_overhead_camera_sees_what_the_heightmap_sees() -> None:
+    """The ``overhead`` camera is the heightmap camera: with the robot hidden, the peg's pixels
+    of its square image, flipped upside down, lie where the heightmap has them (within the
+    pinhole's parallax of a 30 mm high peg, about 2 px)."""
+    import mujoco
+
+    from vgs.render import open_renderer, render_model
+    from vgs.sim.camera import RayCastCamera
+    from vgs.sim.cell import Cell
+
+    cfg = profile("paper")
+    cell = Cell(cfg.cell, cfg.controller.joint_kp, cfg.controller.joint_kv)
+    cell.reset(np.random.default_rng(1))  # the peg 35 px below the centre row: flips show
+    hm = RayCastCamera(cell.model, cfg.cell.camera).capture(cell.data)
+    model = render_model(cfg.cell)
+    data = mujoco.MjData(model)
+    data.qpos[:] = cell.data.qpos
+    data.mocap_pos[:] = cell.data.mocap_pos
+    mujoco.mj_forward(model, data)
+    option = mujoco.MjvOption()
+    option.geomgroup[:] = 0
+    option.geomgroup[0] = 1  # table, peg, hole: what the ray-cast camera sees
+    size = cfg.cell.camera.size
+    renderer = open_renderer(model, size, size)
+    renderer.update_scene(data, camera="overhead", scene_option=option)
+    image = np.flipud(renderer.render())
+    renderer.close()
+    red = (image[..., 0] > 120) & (image[..., 1] < 90) & (image[..., 2] < 90)
+    peg = hm.depth > 0.005
+    assert red.sum() > 0.5 * peg.sum()
+    np.testing.assert_allclose(np.argwhere(red).mean(axis=0), np.argwhere(peg).mean(axis=0),
+                               atol=3.0)
