@@ -62,6 +62,7 @@ def test_export_scene(tmp_path: Path) -> None:
     proc = vgs("export-scene", "--out", "scene.xml", "--peg-mass", "0.6", "--peg-length",
                "0.11", "--clearance", "0.0008", cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
+    assert "python -m mujoco.viewer --mjcf scene.xml" in proc.stdout  # how to open it
     model = mujoco.MjModel.from_xml_path(str(tmp_path / "scene.xml"))
     peg = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "peg")
     assert model.body_mass[peg] == pytest.approx(0.6)

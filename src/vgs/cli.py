@@ -1,9 +1,10 @@
-"""The ``vgs`` command: ``demo``, ``sweep``, ``export-scene``, ``model-info``, ``train``,
-``heatmap``, ``curves``, ``evaluate``, ``reproduce``, ``report`` and ``status``.
+"""The ``vgs`` command: ``demo``, ``sweep``, ``export-scene``, ``export-policy``,
+``model-info``, ``train``, ``heatmap``, ``curves``, ``evaluate``, ``reproduce``, ``report``,
+``seeds`` and ``status``.
 
-Every command but ``status`` takes ``--profile`` and configuration overrides (``--peg-mass``
-... and the generic ``--set key=value`` with a dotted path into
-:class:`vgs.config.ExperimentConfig`). Bad input,
+Every command but ``status``, ``seeds`` and ``export-policy`` takes ``--profile`` and
+configuration overrides (``--peg-mass`` ... and the generic ``--set key=value`` with a dotted
+path into :class:`vgs.config.ExperimentConfig`). Bad input,
 whether argparse rejects it or a :class:`vgs.errors.VGSError` is raised, ends with one line
 ``vgs: error: <field>: <message>`` on stderr and exit code 2; so do an OS error on a file or
 folder (an ``--out`` that is a file, a full disk) and a corrupt file of a run folder. Ctrl-C
@@ -151,7 +152,15 @@ def _float_list_mm(text: str) -> tuple[float, ...]:
 
 
 def cmd_demo(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
-    """One traced episode: phase table (or JSON record) and DIR/demo.png."""
+    """One traced episode: phase table (or JSON record), DIR/demo.png and, with ``--video``, the
+    episode rendered as a video."""
+    video_size = _video_size(args.video_size) if args.video else None
+    if args.video:
+        check_video_name(args.video)
+        headless_gl_default()  # before anything imports mujoco
+        from vgs.render import require_gl
+
+        require_gl()  # before the episode, not after it
     from vgs.experiments.demo import format_report, run_demo
     from vgs.experiments.plots import demo_figure
 
@@ -160,12 +169,46 @@ def cmd_demo(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     figure = demo_figure(result, out / "demo.png")
+    video = None
+    if args.video and video_size is not None:
+        from vgs.experiments.demo import demo_video
+
+        video = demo_video(result, cfg.cell, args.video, fps=args.video_fps,
+                           speed=args.video_speed, width=video_size[0], height=video_size[1])
     if args.json:
         print(json.dumps(json_safe(result.record.to_row())))
     else:
         print(format_report(result.record))
         print(f"\nfigure          {figure}")
+        if video is not None:
+            print(f"video           {video}")
     return 0
+
+
+def check_video_name(name: str) -> None:
+    """Raise :class:`ConfigError` (``video``) unless ``name`` ends in .mp4 or .gif."""
+    if Path(name).suffix.lower() not in (".mp4", ".gif"):
+        raise ConfigError("video", f"{name}: the file must end in .mp4 or .gif")
+
+
+def headless_gl_default() -> None:
+    """Let MuJoCo render headless (``MUJOCO_GL=egl``) where no display is set and the user
+    chose no back end; must run before mujoco is first imported to take effect."""
+    if "MUJOCO_GL" not in os.environ and not (os.environ.get("DISPLAY")
+                                              or os.environ.get("WAYLAND_DISPLAY")):
+        os.environ["MUJOCO_GL"] = "egl"
+
+
+def _video_size(text: str) -> tuple[int, int]:
+    """``WxH`` -> (width, height) in pixels."""
+    w, sep, h = text.lower().partition("x")
+    try:
+        size = (int(w), int(h))
+    except ValueError:
+        size = (0, 0)
+    if not sep or not (16 <= size[0] <= 1920 and 16 <= size[1] <= 1080):
+        raise ConfigError("video-size", f"expected WxH within 16-1920 x 16-1080, got {text!r}")
+    return size
 
 
 def cmd_sweep(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
@@ -198,8 +241,21 @@ def cmd_export_scene(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
 
     info = export_scene(cfg, args.out, seed=args.seed)
     print(f"wrote {info.path} ({info.nbody} bodies, {info.ngeom} geoms, {info.nmesh} meshes, "
-          f"{info.nu} actuators; keyframe 'home'); view it with: "
-          f"python -m mujoco.viewer --mjcf {info.path}")
+          f"{info.nu} actuators, cameras {', '.join(info.cameras)}); it opens at home with the "
+          f"peg on the table (seed {args.seed}) and holds still until you act; open it with: "
+          f"python -m mujoco.viewer --mjcf {info.path}  (Python: mujoco.MjModel.from_xml_path; "
+          f"ctrl = 0 holds home, ctrl_i = q - q_home_i drives joint i to q)")
+    return 0
+
+
+def cmd_export_policy(args: argparse.Namespace, cfg: ExperimentConfig | None) -> int:
+    """Write a training run's network as plain weights plus a JSON description."""
+    from vgs.experiments.export_policy import export_policy
+
+    written = export_policy(Path(args.run_dir), Path(args.out))
+    print(f"wrote {written.weights} ({written.parameters} values; "
+          f"torch.load(path, weights_only=True)) and {written.description}; the plain-torch "
+          f"snippet that runs them: docs/grasping.md, 'Using a trained network without vgs'")
     return 0
 
 
@@ -385,6 +441,16 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--offset", type=float, default=0.0, metavar="MM",
                       help="grasp offset from the visible peg centre along its axis [mm] "
                            "(default: 0, the centre heuristic)")
+    demo.add_argument("--video", metavar="FILE",
+                      help="also render the episode from the perspective camera to FILE (.mp4 "
+                           "or .gif), phase and F/T reading on every frame; needs OpenGL "
+                           "(headless: MUJOCO_GL=egl, the default without a display)")
+    demo.add_argument("--video-fps", type=float, default=15.0,
+                      help="video frames per second (default: %(default)s)")
+    demo.add_argument("--video-speed", type=float, default=4.0,
+                      help="simulated seconds per second of video (default: %(default)s)")
+    demo.add_argument("--video-size", default="480x360", metavar="WxH",
+                      help="frame size in pixels (default: %(default)s)")
     demo.set_defaults(func=cmd_demo)
 
     sweep = sub.add_parser("sweep", parents=[common],
@@ -407,11 +473,20 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.set_defaults(func=cmd_sweep)
 
     scene = sub.add_parser("export-scene", parents=[common],
-                           help="write the cell as MJCF for MuJoCo's viewer")
+                           help="write the cell as MJCF, ready to open in MuJoCo's viewer")
     scene.add_argument("--out", default="scene.xml", help="MJCF file (default: %(default)s)")
     scene.add_argument("--seed", type=seed_arg, default=0,
-                       help="reset seed stored as the 'home' keyframe (default: 0)")
+                       help="reset seed of the written default state: peg pose, hole position "
+                            "(default: 0)")
     scene.set_defaults(func=cmd_export_scene)
+
+    export_pol = sub.add_parser("export-policy",
+                                help="a training run's network as plain weights (torch.load "
+                                     "weights_only) plus a JSON description")
+    export_pol.add_argument("run_dir", metavar="RUN", help="a training run folder")
+    export_pol.add_argument("--out", required=True,
+                            help="weights file (.pt); the description goes beside it (.json)")
+    export_pol.set_defaults(func=cmd_export_policy)
 
     info = sub.add_parser("model-info", parents=[common],
                           help="parameter counts and tensor shapes of the grasp network")

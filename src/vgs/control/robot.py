@@ -23,13 +23,19 @@ from vgs.sim.ft_sensor import FTSensor
 
 @dataclass
 class Trace:
-    """Per-tick signals for figures (kept only when asked for: it costs time)."""
+    """Per-tick signals for figures and videos (kept only when asked for: it costs time).
+
+    ``qpos`` holds a copy of the whole ``data.qpos`` per tick, so that an episode can be
+    rendered afterwards from the recorded states (:mod:`vgs.render`) without rendering in the
+    control loop.
+    """
 
     time: list[float] = field(default_factory=list)
     wrench: list[np.ndarray] = field(default_factory=list)
     tcp: list[np.ndarray] = field(default_factory=list)
     peg_tip: list[np.ndarray] = field(default_factory=list)
     phase: list[str] = field(default_factory=list)
+    qpos: list[np.ndarray] = field(default_factory=list)
 
 
 class Robot:
@@ -83,6 +89,7 @@ class Robot:
         half = 0.5 * self.cell.cfg.peg.length * R[:, 2]
         t.peg_tip.append(p - half if (p - half)[2] < (p + half)[2] else p + half)
         t.phase.append(self.phase)
+        t.qpos.append(d.qpos.copy())
 
     def run(self, duration: float, until: Callable[[], bool] | None = None) -> bool:
         """Tick for ``duration`` seconds or until ``until()`` is true; return whether it was."""

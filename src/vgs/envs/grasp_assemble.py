@@ -1,90 +1,223 @@
 """``vgs/GraspAssemble-v0``: one grasp followed by its assembly per episode.
 
-Observation: ``{"color": uint8 (H, W, 3), "depth": float32 (H, W) heights [m]}``, the camera's
-heightmaps. Action: ``(rotation k, row i, col j)`` as the grasp network outputs it; pixel
-(i, j) is the grasp point and theta_k = 2 pi k / R the closing direction. Reward: paper eq. 5,
-``r_G`` for a successful grasp plus, in ``vgs`` mode, ``r_AM`` when the assembly succeeded in
-less than ``threshold_s``. Every step terminates the episode; ``info["record"]`` is the episode
-record
-(``EpisodeRecord.to_row()``, with None for undefined fields).
+Made with ``gymnasium.make("vgs/GraspAssemble-v0", cfg="quick", mode="vgs",
+condition="nominal", overrides={"cell.peg.mass": 0.6})`` after ``import vgs``.
+
+Observation (``Dict``), the overhead camera's heightmaps as images (H = W =
+``cell.camera.size``, 224 by default; rows along +y, columns along +x):
+
+* ``color``: uint8 (H, W, 3), RGB;
+* ``depth``: uint8 (H, W, 1), the height above the table in units of :data:`DEPTH_UNIT`
+  (0.5 mm; 0-127.5 mm, the lying peg is 30 mm high). The full-precision heightmap is
+  ``env.unwrapped.heightmap``.
+
+Action (``MultiDiscrete([R, H, W])``): ``(rotation k, row i, col j)`` as the grasp network
+outputs it; pixel (i, j) is the grasp point and theta_k = 2 pi k / R the closing direction
+(R = ``network.num_rotations``). ``info["action_mask"]`` (bool (H, W)) marks the pixels on
+the peg, where the agent of the paper grasps; an action elsewhere grasps at the table and fails.
+The mask is the same for every rotation.
+
+Reward: paper eq. 5 with training's code (:func:`vgs.grasping.rewards.episode_reward`):
+``r_G`` for a successful grasp plus, in ``vgs`` mode, ``r_AM`` when the assembly succeeded
+faster than the threshold. The threshold follows training's rule
+(:func:`vgs.grasping.rewards.next_threshold`): ``reward.threshold_s`` when given, else the
+running ``reward.threshold_percentile`` of the successful assembly times of this env's first
+``agent.random_episodes`` episodes, frozen after them (``env.unwrapped.threshold_s``; no r_AM
+before a first time is known). A seeded ``reset(seed=...)`` starts the run over (episode count
+and times cleared), so a seeded env reproduces its episodes and rewards.
+
+Conditions (paper 4.2, as ``vgs evaluate`` draws them): ``nominal``; ``mass``, the peg's mass
+times 1 +- ``eval.mass_range``; ``length``, its length times 1 +- ``eval.length_range`` with
+the mass following; one uniform draw per episode.
+
+Every step ends the episode (``terminated=True``); ``info["record"]`` is the episode record
+(``EpisodeRecord.to_row()``, ``None`` for undefined values). ``render_mode="rgb_array"``:
+:meth:`GraspAssembleEnv.render` draws the cell's current state (after ``reset``: the peg on the
+table; after ``step``: the end of the assembly) from the ``perspective`` camera; it needs
+OpenGL (``MUJOCO_GL=egl`` on headless machines) and runs only when called.
 """
 
 from __future__ import annotations
 
+import math
+from collections.abc import Mapping
+from dataclasses import replace
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from vgs.assembly.episode import EpisodeRunner, GraspCommand
-from vgs.config import ExperimentConfig, profile
+from vgs.assembly.episode import EpisodeRunner
+from vgs.config import ExperimentConfig, PegConfig, override, profile
 from vgs.errors import ConfigError
-from vgs.grasping.rewards import MODES, grasp_reward
+from vgs.experiments.evaluate import CONDITIONS, condition_peg
+from vgs.experiments.policies import pixel_command
+from vgs.grasping.actions import peg_mask, rotation_angle
+from vgs.grasping.rewards import MODES, episode_reward, next_threshold
 from vgs.sim.camera import Heightmap
 
-DEFAULT_THRESHOLD_S = 60.0  # assembly-time threshold when neither argument nor config gives one
-MAX_HEIGHT = 0.5  # upper bound of the depth observation [m]
+DEPTH_UNIT = 0.0005  # metres per unit of the uint8 depth observation
+RENDER_MODES = ("rgb_array",)
 
 
-class GraspAssembleEnv(gym.Env):
-    """Grasp-and-assemble environment.
+def make_config(cfg: ExperimentConfig | str | None,
+                overrides: Mapping[str, Any] | None = None) -> ExperimentConfig:
+    """The configuration of a profile name (or a configuration) with dotted-path overrides.
 
     Args:
-        cfg: Experiment configuration (default: the ``smoke`` profile).
+        cfg: A profile name (``smoke``, ``quick``, ``medium``, ``paper``), a configuration,
+            or ``None`` for ``paper``.
+        overrides: ``{"cell.peg.mass": 0.6, ...}``, applied in order.
+
+    Raises:
+        ConfigError: On an unknown profile, field or an invalid value.
+    """
+    if cfg is None or isinstance(cfg, str):
+        cfg = profile(cfg or "paper")
+    elif not isinstance(cfg, ExperimentConfig):
+        raise ConfigError("cfg", f"expected a profile name or an ExperimentConfig, got "
+                                 f"{type(cfg).__name__}")
+    for path, value in (overrides or {}).items():
+        try:
+            cfg = override(cfg, path, value)
+        except (TypeError, ValueError) as exc:
+            if isinstance(exc, ConfigError):
+                raise
+            raise ConfigError(path, f"invalid value {value!r} ({exc})") from exc
+    return cfg
+
+
+def depth_image(depth: np.ndarray) -> np.ndarray:
+    """Heights [m] (H, W) -> the uint8 (H, W, 1) depth observation in :data:`DEPTH_UNIT`."""
+    units = np.rint(np.clip(depth, 0.0, 255 * DEPTH_UNIT) / DEPTH_UNIT)
+    return units.astype(np.uint8)[..., None]
+
+
+class GraspAssembleEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
+    """Grasp-and-assemble environment (module docstring).
+
+    Args:
+        cfg: Profile name or configuration (default: the ``paper`` profile).
         mode: ``vgs`` (grasp and assembly reward) or ``baseline`` (grasp reward only).
-        threshold_s: Assembly-time threshold [s]; default ``cfg.reward.threshold_s`` or
-            :data:`DEFAULT_THRESHOLD_S`.
+        condition: ``nominal``, ``mass`` or ``length``.
+        overrides: Configuration overrides by dotted path, e.g. ``{"cell.peg.mass": 0.6}``.
+        threshold_s: Fixed assembly-time threshold [s] (sets ``reward.threshold_s``);
+            default: the configured one, else derived as in training.
+        render_mode: ``None`` or ``"rgb_array"``.
+        render_width: Width of rendered frames [px].
+        render_height: Height of rendered frames [px].
+
+    Raises:
+        ConfigError: On a bad mode, condition, render mode or configuration.
     """
 
-    metadata: dict[str, Any] = {"render_modes": []}
+    metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": 2}
 
-    def __init__(self, cfg: ExperimentConfig | None = None, mode: str = "vgs",
-                 threshold_s: float | None = None) -> None:
+    def __init__(self, cfg: ExperimentConfig | str | None = None, mode: str = "vgs",
+                 condition: str = "nominal", overrides: Mapping[str, Any] | None = None,
+                 threshold_s: float | None = None, render_mode: str | None = None,
+                 render_width: int = 480, render_height: int = 360) -> None:
         if mode not in MODES:
             raise ConfigError("mode", f"must be one of {MODES}, got {mode!r}")
-        self.cfg = cfg or profile("smoke")
+        if condition not in CONDITIONS:
+            raise ConfigError("condition", f"must be one of {CONDITIONS}, got {condition!r}")
+        if render_mode is not None and render_mode not in RENDER_MODES:
+            raise ConfigError("render_mode", f"must be None or one of {RENDER_MODES}, got "
+                                             f"{render_mode!r}")
+        cfg = make_config(cfg, overrides)
+        if threshold_s is not None:
+            cfg = override(cfg, "reward.threshold_s", float(threshold_s))
+        self.cfg = cfg
         self.mode = mode
-        threshold = threshold_s if threshold_s is not None else self.cfg.reward.threshold_s
-        self.threshold_s = DEFAULT_THRESHOLD_S if threshold is None else float(threshold)
-        if not self.threshold_s > 0:
-            raise ConfigError("reward.threshold_s", "must be > 0")
-        size = self.cfg.cell.camera.size
-        rotations = self.cfg.network.num_rotations
+        self.condition = condition
+        self.render_mode = render_mode
+        self.render_size = (int(render_width), int(render_height))
+        size = cfg.cell.camera.size
         self.observation_space = spaces.Dict({
             "color": spaces.Box(0, 255, (size, size, 3), np.uint8),
-            "depth": spaces.Box(0.0, MAX_HEIGHT, (size, size), np.float32),
+            "depth": spaces.Box(0, 255, (size, size, 1), np.uint8),
         })
-        self.action_space = spaces.MultiDiscrete([rotations, size, size])
-        self.runner = EpisodeRunner(self.cfg)
+        self.action_space = spaces.MultiDiscrete([cfg.network.num_rotations, size, size])
+        self.runner = EpisodeRunner(cfg)
+        self.threshold_s: float | None = cfg.reward.threshold_s
+        self.episodes = 0
+        self._times: list[float] = []
         self._seed = 0
-        self._hm: Heightmap | None = None
+        self._peg: PegConfig = cfg.cell.peg
+        self.heightmap: Heightmap | None = None
+        self._renderer: Any = None
+        self._renderer_key: tuple[float, float] | None = None
 
     def _obs(self, hm: Heightmap) -> dict[str, np.ndarray]:
-        return {"color": hm.color.copy(),
-                "depth": np.clip(hm.depth, 0.0, MAX_HEIGHT).astype(np.float32)}
+        return {"color": hm.color.copy(), "depth": depth_image(hm.depth)}
 
-    def reset(self, *, seed: int | None = None,
-              options: dict[str, Any] | None = None) -> tuple[dict[str, np.ndarray], dict]:
+    def _info(self, hm: Heightmap) -> dict[str, Any]:
+        return {"episode_seed": self._seed, "action_mask": peg_mask(hm.depth),
+                "peg_mass_kg": self._peg.mass, "peg_length_mm": self._peg.length * 1000.0}
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
+              ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """Place a new peg (and hole); a ``seed`` also starts the run over (module docstring)."""
         super().reset(seed=seed)
+        if seed is not None:
+            self.episodes = 0
+            self._times = []
+            self.threshold_s = self.cfg.reward.threshold_s
         self._seed = int(self.np_random.integers(0, 2**31 - 1))
-        self._hm = self.runner.observe(self._seed)
-        return self._obs(self._hm), {"episode_seed": self._seed}
+        self._peg = condition_peg(self.cfg, self.condition,
+                                  float(self.np_random.uniform(-1.0, 1.0)))
+        self.heightmap = self.runner.observe(self._seed, self._peg)
+        return self._obs(self.heightmap), self._info(self.heightmap)
 
-    def step(self, action: Any) -> tuple[dict[str, np.ndarray], float, bool, bool, dict]:
-        if self._hm is None:
-            raise RuntimeError("call reset() before step()")
+    def step(self, action: Any) -> tuple[dict[str, np.ndarray], float, bool, bool,
+                                         dict[str, Any]]:
+        """Grasp at the action's pixel and rotation, assemble, end the episode."""
+        hm = self.heightmap
+        if hm is None:
+            raise gym.error.ResetNeeded("call reset() before step()")
         k, row, col = (int(a) for a in np.asarray(action).reshape(3))
-        rotations = self.cfg.network.num_rotations
-        angle = 2 * np.pi * k / rotations
-        hm = self._hm
-        x, y = hm.pixel_to_world(row, col)
-        command = GraspCommand(float(x), float(y), float(angle - np.pi / 2))
-        record, _, _ = self.runner.run(self._seed, lambda _hm: command)
+        if not self.action_space.contains(np.array([k, row, col], dtype=np.int64)):
+            raise ConfigError("action", f"{(k, row, col)} is outside {self.action_space}")
+        command = pixel_command(hm, row, col, rotation_angle(k, self.cfg.network.num_rotations))
+        record, _, _ = self.runner.run(self._seed, lambda _hm: command, peg=self._peg)
         time_ok = record.assembly_time if record.success else None
-        r_g, r_am = grasp_reward(record.grasp_success, time_ok, self.threshold_s, self.mode,
-                                 self.cfg.reward)
+        exploring = self.episodes < self.cfg.agent.random_episodes
+        self.threshold_s = next_threshold(self._times, self.threshold_s, time_ok, exploring,
+                                          self.cfg.reward)
+        r_g, r_am = episode_reward(record.grasp_success, time_ok, self.threshold_s, self.mode,
+                                   self.cfg.reward)
+        self.episodes += 1
         # Undefined fields (NaN, e.g. no grasp offset without a grasp) are given as None.
-        row = {k: (None if isinstance(v, float) and np.isnan(v) else v)
-               for k, v in record.to_row().items()}
-        return self._obs(hm), float(r_g + r_am), True, False, {"record": row}
+        row_values = {key: (None if isinstance(v, float) and math.isnan(v) else v)
+                      for key, v in record.to_row().items()}
+        info = {**self._info(hm), "record": row_values, "r_grasp": r_g, "r_assembly": r_am}
+        return self._obs(hm), float(r_g + r_am), True, False, info
+
+    def render(self) -> np.ndarray | None:  # type: ignore[override]
+        """The cell's current state from the ``perspective`` camera (``rgb_array`` mode).
+
+        Raises:
+            GLUnavailableError: If no OpenGL context can be made.
+        """
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode; make the env with "
+                            "render_mode='rgb_array'")
+            return None
+        from vgs.render import SceneRenderer
+
+        cell, _ = self.runner.cell(self._peg)
+        key = (self._peg.mass, self._peg.length)
+        if self._renderer is None or self._renderer_key != key:
+            self.close()
+            self._renderer = SceneRenderer(replace(self.cfg.cell, peg=self._peg),
+                                           *self.render_size)
+            self._renderer_key = key
+        return self._renderer.frame(cell.data.qpos, cell.data.mocap_pos)
+
+    def close(self) -> None:
+        """Free the renderer's OpenGL context, if one was made."""
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+            self._renderer_key = None

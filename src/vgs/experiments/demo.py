@@ -1,15 +1,20 @@
-"""One whole episode for people to look at: look, grasp, assemble, with the signals traced."""
+"""One whole episode for people to look at: look, grasp, assemble, with the signals traced.
+
+:func:`demo_video` draws the traced episode afterwards, from its recorded states, as a video
+with the phase and the wrist F/T reading written on every frame.
+"""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from vgs.assembly.episode import EpisodeRunner, GraspCommand, offset_policy
 from vgs.assembly.record import PHASES, EpisodeRecord
-from vgs.config import ExperimentConfig, PegConfig
+from vgs.config import CellConfig, ExperimentConfig, PegConfig
 from vgs.control.robot import Trace
 from vgs.errors import ConfigError
 from vgs.sim.camera import Heightmap
@@ -96,3 +101,94 @@ def format_report(record: EpisodeRecord) -> str:
         f"insertion depth {record.insertion_depth_mm:.1f} mm",
     ]
     return "\n".join(lines)
+
+
+def frame_indices(times: np.ndarray, fps: float, speed: float) -> np.ndarray:
+    """Indices of the ticks shown as video frames: one every ``speed / fps`` simulated seconds.
+
+    Args:
+        times: Simulated time of each recorded tick [s], increasing.
+        fps: Video frames per second.
+        speed: Simulated seconds per second of video.
+
+    Returns:
+        For each frame, the index of the last tick at or before its time.
+    """
+    if times.size == 0:
+        return np.zeros(0, dtype=int)
+    step = speed / fps
+    frame_times = times[0] + step * np.arange(int((times[-1] - times[0]) / step) + 1)
+    return np.clip(np.searchsorted(times, frame_times + 1e-9, side="right") - 1, 0,
+                   times.size - 1)
+
+
+def frame_text(result: DemoResult, index: int, speed: float) -> list[str]:
+    """The lines written on the frame of tick ``index``: time, phase, F/T reading."""
+    trace = result.trace
+    f = trace.wrench[index][:3]
+    m = trace.wrench[index][3:]
+    return [
+        f"seed {result.record.seed}   t = {trace.time[index]:5.1f} s  (x{speed:g})",
+        f"phase: {trace.phase[index]}",
+        f"F [N]    {f[0]:+6.1f} {f[1]:+6.1f} {f[2]:+6.1f}",
+        f"M [N m]  {m[0]:+6.2f} {m[1]:+6.2f} {m[2]:+6.2f}",
+    ]
+
+
+def outcome_text(record: EpisodeRecord) -> str:
+    """One line: assembled and how fast, or why not."""
+    if record.success:
+        return f"assembled in {record.assembly_time:.1f} s"
+    return f"not assembled ({record.failure_reason})"
+
+
+def demo_video(result: DemoResult, cell: CellConfig, path: str | Path, fps: float = 15.0,
+               speed: float = 4.0, width: int = 480, height: int = 360,
+               hold_s: float = 1.5) -> Path:
+    """Render a traced episode from the ``perspective`` camera and write it as a video.
+
+    The states recorded per control tick (``trace.qpos``) are drawn after the episode, one
+    every ``speed / fps`` simulated seconds; every frame carries the simulated time, the phase
+    and the tared wrist F/T reading at the TCP; the last frame, with the outcome, is held for
+    ``hold_s`` seconds.
+
+    Args:
+        result: A traced episode (:func:`run_demo`).
+        cell: The cell the episode ran in (the peg to draw).
+        path: ``.mp4`` or ``.gif`` file.
+        fps: Video frames per second.
+        speed: Simulated seconds per second of video.
+        width: Frame width [px].
+        height: Frame height [px].
+        hold_s: Seconds the last frame is shown.
+
+    Returns:
+        The written file.
+
+    Raises:
+        ConfigError: ``video`` on a bad file name, ``video.fps`` / ``video.speed`` if not
+            positive, ``video.size`` on a bad size.
+        GLUnavailableError: If no OpenGL context can be made.
+    """
+    from vgs.render import SceneRenderer, annotate, write_video
+
+    if not (math.isfinite(fps) and fps > 0):
+        raise ConfigError("video.fps", f"must be > 0, got {fps}")
+    if not (math.isfinite(speed) and speed > 0):
+        raise ConfigError("video.speed", f"must be > 0, got {speed}")
+    trace = result.trace
+    if not trace.qpos:
+        raise ConfigError("video", "the episode recorded no states")
+    indices = frame_indices(np.asarray(trace.time), fps, speed)
+    mocap = np.array([*result.hole_xy, 0.0])
+    renderer = SceneRenderer(cell, width, height)
+    try:
+        frames = [annotate(renderer.frame(trace.qpos[i], mocap), frame_text(result, i, speed))
+                  for i in indices]
+        final = annotate(renderer.frame(trace.qpos[-1], mocap),
+                         [*frame_text(result, len(trace.qpos) - 1, speed)[:2],
+                          outcome_text(result.record)])
+    finally:
+        renderer.close()
+    frames += [final] * max(1, int(round(hold_s * fps)))
+    return write_video(path, frames, fps)

@@ -114,21 +114,34 @@ class EpisodeTask:
 
 def plan_episodes(cfg: ExperimentConfig, spec: EvalSpec) -> list[EpisodeTask]:
     """The episodes of ``spec`` in index order (module docstring)."""
-    nominal = cfg.cell.peg
     tasks = []
     for i in range(spec.episodes):
         seq = np.random.SeedSequence([spec.seed, i, EVAL_STREAM])
         seed = int(seq.generate_state(1)[0])
         rng = np.random.default_rng(seq.spawn(1)[0])
-        factor = float(rng.uniform(-1.0, 1.0))
-        peg = nominal
-        if spec.condition == "mass":
-            peg = replace(nominal, mass=nominal.mass * (1.0 + cfg.eval.mass_range * factor))
-        elif spec.condition == "length":
-            scale = 1.0 + cfg.eval.length_range * factor
-            peg = replace(nominal, length=nominal.length * scale, mass=nominal.mass * scale)
+        peg = condition_peg(cfg, spec.condition, float(rng.uniform(-1.0, 1.0)))
         tasks.append(EpisodeTask(i, seed, peg, spec.policy))
     return tasks
+
+
+def condition_peg(cfg: ExperimentConfig, condition: str, factor: float) -> PegConfig:
+    """The peg of a test condition (paper 4.2) for a draw ``factor`` in [-1, 1].
+
+    ``nominal``: the configured peg; ``mass``: its mass times ``1 + eval.mass_range * factor``;
+    ``length``: its length times ``1 + eval.length_range * factor``, the mass following.
+
+    Raises:
+        ConfigError: ``condition`` if it is not one of :data:`CONDITIONS`.
+    """
+    nominal = cfg.cell.peg
+    if condition == "nominal":
+        return nominal
+    if condition == "mass":
+        return replace(nominal, mass=nominal.mass * (1.0 + cfg.eval.mass_range * factor))
+    if condition == "length":
+        scale = 1.0 + cfg.eval.length_range * factor
+        return replace(nominal, length=nominal.length * scale, mass=nominal.mass * scale)
+    raise ConfigError("condition", f"must be one of {CONDITIONS}, got {condition!r}")
 
 
 # -- one episode, in whatever process runs it ---------------------------------------------------

@@ -66,7 +66,7 @@ from vgs.experiments.policies import pixel_command
 from vgs.grasping.agent import DeltaQMonitor, GraspAction, GraspAgent
 from vgs.grasping.preprocess import peg_mask
 from vgs.grasping.replay import ReplayBuffer, Transition
-from vgs.grasping.rewards import MODES, derive_threshold, grasp_reward
+from vgs.grasping.rewards import MODES, episode_reward, next_threshold
 from vgs.runfolder import check_request, host, locked, read_json, write_json
 from vgs.sim.camera import Heightmap
 from vgs.validate import check_config
@@ -406,21 +406,17 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
             # Reward (eq. 5). The threshold is the running percentile while exploring.
             exploring = episode < cfg.agent.random_episodes
             time_ok = record.assembly_time if record.success else None
-            if cfg.reward.threshold_s is None and exploring and time_ok is not None:
-                state.exploration_times.append(time_ok)
-            if cfg.reward.threshold_s is None and (exploring or state.threshold is None):
-                times = state.exploration_times
-                state.threshold = (derive_threshold(times, cfg.reward.threshold_percentile)
-                                   if times else None)
-                if not exploring or episode == cfg.agent.random_episodes - 1:
-                    write_json(out / "threshold.json",
-                               {"threshold_s": state.threshold, "n_times": len(times),
-                                "percentile": cfg.reward.threshold_percentile})
+            derived = cfg.reward.threshold_s is None and (exploring or state.threshold is None)
+            state.threshold = next_threshold(state.exploration_times, state.threshold, time_ok,
+                                             exploring, cfg.reward)
+            if derived and (not exploring or episode == cfg.agent.random_episodes - 1):
+                write_json(out / "threshold.json",
+                           {"threshold_s": state.threshold, "n_times": len(state.exploration_times),
+                            "percentile": cfg.reward.threshold_percentile})
             threshold = state.threshold if state.threshold is not None else math.inf
             # Before any assembly time is known no threshold exists, so no r_AM can be earned.
-            reward_mode = mode if state.threshold is not None else "baseline"
-            r_grasp, r_asm = grasp_reward(record.grasp_success, time_ok, state.threshold,
-                                          reward_mode, cfg.reward)
+            r_grasp, r_asm = episode_reward(record.grasp_success, time_ok, state.threshold,
+                                            mode, cfg.reward)
             reward = r_grasp + r_asm
 
             # Learning: the executed pixel, then prioritised replays.

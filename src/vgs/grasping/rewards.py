@@ -94,4 +94,45 @@ def derive_threshold(times: Iterable[float], percentile: float) -> float:
     return float(np.percentile(values, percentile))
 
 
-__all__ = ["MODES", "derive_threshold", "grasp_reward"]
+def next_threshold(times: list[float], threshold: float | None, time_ok: float | None,
+                   exploring: bool, cfg: RewardConfig) -> float | None:
+    """Training's assembly-time threshold after one more episode.
+
+    The rule: ``cfg.threshold_s`` when it is given; otherwise, while the agent explores at
+    random (the first ``agent.random_episodes`` episodes), the running ``threshold_percentile``
+    of the successful assembly times seen so far (:func:`derive_threshold`), frozen when that
+    phase ends. Used by training (:mod:`vgs.experiments.train`) and the Gymnasium env
+    (:mod:`vgs.envs.grasp_assemble`).
+
+    Args:
+        times: Successful exploration-phase assembly times so far [s]; ``time_ok`` is appended
+            to it while exploring.
+        threshold: The threshold before this episode (``None``: none known yet).
+        time_ok: This episode's assembly time if the assembly succeeded, else ``None``.
+        exploring: Whether this episode belongs to the random-exploration phase.
+        cfg: Reward configuration.
+
+    Returns:
+        The threshold after this episode; ``None`` while no successful time is known.
+    """
+    if cfg.threshold_s is not None:
+        return cfg.threshold_s
+    if exploring and time_ok is not None:
+        times.append(time_ok)
+    if exploring or threshold is None:
+        return derive_threshold(times, cfg.threshold_percentile) if times else None
+    return threshold
+
+
+def episode_reward(success: bool, time_ok: float | None, threshold: float | None, mode: str,
+                   cfg: RewardConfig) -> tuple[float, float]:
+    """The two reward terms of one episode as training gives them.
+
+    As :func:`grasp_reward`, except that before any threshold is known (``threshold`` is
+    ``None``) no r_AM can be earned, in either mode.
+    """
+    return grasp_reward(success, time_ok, threshold,
+                        mode if threshold is not None else "baseline", cfg)
+
+
+__all__ = ["MODES", "derive_threshold", "episode_reward", "grasp_reward", "next_threshold"]
