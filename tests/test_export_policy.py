@@ -17,7 +17,9 @@ import torch
 from vgs.config import ExperimentConfig, override, profile, to_dict
 from vgs.errors import ConfigError
 from vgs.experiments.export_policy import export_policy
-from vgs.grasping.agent import GraspAgent
+from vgs.experiments.train import TrainState, save_checkpoint
+from vgs.grasping.agent import DeltaQMonitor, GraspAgent
+from vgs.grasping.replay import ReplayBuffer
 
 ROOT = Path(__file__).resolve().parents[1]
 VGS = str(Path(sys.executable).with_name("vgs"))
@@ -35,7 +37,8 @@ def fake_run(folder: Path, cfg: ExperimentConfig) -> GraspAgent:
             agent.eva_net.train()(c, d * 2 - 1, rotations=[0])
     folder.mkdir(parents=True)
     (folder / "run.json").write_text(json.dumps({"mode": "vgs", "config": to_dict(cfg)}))
-    torch.save({"agent": agent.state_dict(), "episode": 7}, folder / "checkpoint.pt")
+    save_checkpoint(folder / "checkpoint.pt", agent, ReplayBuffer(cfg.agent.replay_capacity),
+                    TrainState(7), DeltaQMonitor.from_config(cfg.agent))
     return agent
 
 

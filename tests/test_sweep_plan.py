@@ -2,20 +2,23 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
 import pytest
 
 from vgs.config import PegConfig, profile
-from vgs.errors import ConfigError
+from vgs.errors import ConfigError, VGSError
 from vgs.experiments.sweep import (
     COLUMNS,
     SweepSpec,
     check_spec,
     default_offsets,
     disturbing_moments,
+    paired_analysis,
     plan,
+    read_journal,
     run_sweep,
     summarize,
 )
@@ -57,9 +60,13 @@ def test_plan_seeds_and_pegs() -> None:
     assert [t.index for t in trials] == list(range(12))
     assert [(t.offset_index, t.trial) for t in trials[:5]] == [(0, 0), (0, 1), (0, 2), (0, 3),
                                                                 (1, 0)]
-    assert len({t.seed for t in trials}) == 12
+    # Paired: trial t is the same scene (seed and peg) at every offset.
+    assert len({t.seed for t in trials}) == 4
+    for t in trials:
+        twin = trials[t.trial]
+        assert (t.seed, t.peg) == (twin.seed, twin.peg)
     assert plan(spec, nominal) == trials  # deterministic
-    seed = int(np.random.SeedSequence([3, 1, 2]).generate_state(1)[0])
+    seed = int(np.random.SeedSequence([3, 2]).generate_state(1)[0])
     assert trials[6].seed == seed
     for t in trials:
         length_factor = t.peg.length / nominal.length
@@ -81,17 +88,60 @@ def test_disturbing_moments_follow_eq_2_and_3() -> None:
     assert m_i[1] == pytest.approx(0.5 * m * 0.02**2 * accel)
 
 
+def _row(offset: float, trial: int, ok: bool, time: float, align: float = 1.0,
+         retries: int = 0) -> dict[str, object]:
+    return {"offset_mm": offset, "trial": trial, "success": ok, "assembly_time_s": time,
+            "time_align_s": align, "adjustments": 2, "retries": retries,
+            "failure_reason": "" if ok else "timeout:align"}
+
+
 def test_summarize() -> None:
-    rows = [
-        {"offset_mm": 0.0, "success": True, "assembly_time_s": 10.0, "adjustments": 2},
-        {"offset_mm": 0.0, "success": True, "assembly_time_s": 14.0, "adjustments": 4},
-        {"offset_mm": 20.0, "success": False, "assembly_time_s": 90.0, "adjustments": 30},
-    ]
+    rows = [_row(0.0, 0, True, 10.0), _row(0.0, 1, True, 14.0, retries=1),
+            _row(20.0, 0, False, 90.0)]
     s = summarize(rows)
-    assert s[0] == {"offset_mm": 0.0, "n": 2, "successes": 2, "success_rate": 1.0,
-                    "time_mean_s": 12.0, "time_std_s": 2.0, "time_min_s": 10.0,
-                    "time_max_s": 14.0, "adjustments_mean": 3.0}
+    assert s[0]["n"] == 2 and s[0]["successes"] == 2 and s[0]["success_rate"] == 1.0
+    assert s[0]["time_mean_s"] == 12.0 and s[0]["time_std_s"] == 2.0
+    assert s[0]["retry_rate"] == 0.5 and s[0]["time_align_mean_s"] == 1.0
     assert s[1]["success_rate"] == 0.0 and s[1]["time_mean_s"] is None
+
+
+def test_paired_analysis_recovers_a_known_slope() -> None:
+    """Times T = 20 + 0.5 |offset| + scene noise (+ a little noise per episode at one offset):
+    the scene noise cancels in the paired differences, so they are exact where no episode
+    noise is added, and the slope's interval holds 0.5 s/mm."""
+    rng = np.random.default_rng(0)
+    noise = rng.normal(0.0, 5.0, 30)
+    extra = rng.normal(0.0, 1.0, 30)
+    rows = [_row(o, t, True, 20.0 + 0.5 * abs(o) + noise[t] + (extra[t] if o < 0 else 0.0),
+                 align=2.0 + 0.1 * abs(o))
+            for t in range(30) for o in (-20.0, 0.0, 20.0)]
+    out = paired_analysis(rows, resamples=300)
+    diff = {e["offset_mm"]: e for e in out["vs_center"]}
+    assert diff[20.0]["time_diff_s"] == pytest.approx(10.0)
+    assert diff[-20.0]["align_diff_s"] == pytest.approx(2.0)
+    lo, hi = diff[20.0]["time_diff_ci_s"]
+    assert lo == pytest.approx(10.0) and hi == pytest.approx(10.0)
+    lo, hi = out["slope"]["time_ci_s_per_mm"]
+    assert lo < 0.5 < hi and out["slope"]["time_s_per_mm"] == pytest.approx(0.5, abs=0.05)
+    sym = out["symmetry"][0]
+    assert sym["abs_offset_mm"] == 20.0 and sym["plus_success"] == [30, 30]
+    assert sym["plus_time_s"] == pytest.approx(sym["minus_time_s"], abs=1.0)
+    assert sym["minus_time_ci_s"][0] < sym["plus_time_s"] < sym["minus_time_ci_s"][1]
+
+
+def test_sweep_journal_resumes_and_refuses_another_sweep(tmp_path) -> None:
+    spec = SweepSpec(offsets=(0.0, 0.01), trials=2, seed=1)
+    trials = plan(spec, PegConfig())
+    journal = tmp_path / "journal.jsonl"
+    row = {"index": 1, "offset_mm": 0.0, "mass_kg": trials[1].peg.mass,
+           "length_mm": trials[1].peg.length * 1000, "seed": trials[1].seed,
+           "assembly_time_s": None, "success": False}
+    journal.write_text(json.dumps(row) + "\n" + '{"index": 2, "off')  # torn last line
+    rows = read_journal(journal, trials)
+    assert list(rows) == [1] and math.isnan(rows[1]["assembly_time_s"])
+    journal.write_text(json.dumps({**row, "seed": 7}) + "\n")
+    with pytest.raises(VGSError, match="another sweep"):
+        read_journal(journal, trials)
 
 
 @pytest.mark.slow

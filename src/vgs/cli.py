@@ -231,8 +231,24 @@ def cmd_sweep(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
         cells = [s[k] for k in ("time_mean_s", "time_std_s", "time_min_s", "time_max_s")]
         times = "  ".join(f"{'-':>8}" if v is None else f"{v:8.2f}" for v in cells)
         print(f"{s['offset_mm']:11.1f}  {s['n']:3d}  {100 * s['success_rate']:6.0f}%  {times}")
+    paired = json.loads((out / "summary.json").read_text())["paired"]
+    if paired["vs_center"]:
+        print("\npaired against the centre grasp (same scenes; both assembled), 95 % CI:")
+        for e in paired["vs_center"]:
+            lo, hi = e["time_diff_ci_s"]
+            print(f"{e['offset_mm']:11.1f}  dT {_num(e['time_diff_s'])} s [{_num(lo)}, "
+                  f"{_num(hi)}]  pairs {e['pairs']}")
+    slope = paired["slope"]
+    lo, hi = slope["time_ci_s_per_mm"]
+    print(f"time vs |offset|: {_num(slope['time_s_per_mm'], 3)} s/mm [{_num(lo, 3)}, "
+          f"{_num(hi, 3)}]")
     print(f"\nwrote {out / 'sweep.csv'}, {out / 'sweep.png'}, {out / 'summary.json'}")
     return 0
+
+
+def _num(value: float | None, digits: int = 2) -> str:
+    """A number for a table, or '-' when there is none."""
+    return "-" if value is None or value != value else f"{value:+.{digits}f}"
 
 
 def cmd_export_scene(args: argparse.Namespace, cfg: ExperimentConfig) -> int:

@@ -339,6 +339,8 @@ class AssemblyConfig:
             damping is the bias over this speed); a quarter of it counts as still.
         three_point_force: Lateral bias of the slide along the measured reaction [N]; when the
             measured lateral force balances it and the TCP stands still: three-point contact.
+        slide_press_force: Downward force during the slide [N]: light, so that friction at
+            the edge (0.4 x 2 N) leaves the bias free to slide the peg.
         search_stiffness: Lateral admittance stiffness during the spiral search [N/m].
         insert_stiffness: Lateral admittance stiffness during insertion [N/m].
         moment_limit_fraction: The controller keeps the measured moment about the pinch axis
@@ -363,7 +365,8 @@ class AssemblyConfig:
     search_radius: float = 0.02
     drop_threshold: float = 0.001
     slide_speed: float = 0.01
-    three_point_force: float = 3.0
+    three_point_force: float = 2.0
+    slide_press_force: float = 2.0
     search_stiffness: float = 2000.0
     insert_stiffness: float = 300.0
     moment_limit_fraction: float = 0.5
@@ -384,8 +387,8 @@ class AssemblyConfig:
         _positive(
             self, "insertion_depth", "approach_height", "contact_force", "press_force",
             "spiral_pitch", "spiral_speed", "search_radius", "drop_threshold", "slide_speed",
-            "three_point_force", "approach_speed", "search_stiffness", "insert_stiffness",
-            "wiggle_period", "insert_speed", prefix="assembly.",
+            "three_point_force", "slide_press_force", "approach_speed", "search_stiffness",
+            "insert_stiffness", "wiggle_period", "insert_speed", prefix="assembly.",
         )
         if not 0.0 < self.moment_limit_fraction <= 1.0:
             raise ConfigError("assembly.moment_limit_fraction",

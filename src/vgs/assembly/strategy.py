@@ -51,11 +51,8 @@ from vgs.errors import SimulationError
 from vgs.sim.rg2 import PAD_HALF, grasp_moment_capacity
 
 GRAVITY = 9.81
-DEBUG = False
-import os
-ROT_DAMPING = float(os.environ.get("RD", "2.5"))
-KS = float(os.environ["KS"]) if "KS" in os.environ else None
-CONTACT_DAMPING = float(os.environ.get("TD", "1000"))
+ROT_DAMPING = 2.5  # lower bound of the rotational admittance damping in contact [N m s/rad]
+CONTACT_DAMPING = 300.0  # lateral admittance damping in contact: 3x the servo-loop minimum [N s/m]
 ENTRY_DEPTH = 0.004  # descent below the three-point height that means "entered the hole" [m]
 SETTLE_TIME = 0.3  # still time before taring [s]
 LENGTH_TOLERANCE = 0.15  # the product data's length tolerance: the transport clears it
@@ -63,6 +60,9 @@ LOST_WIDTH_FRACTION = 0.8  # finger width below this fraction of the diameter: p
 RETRY_LIFT = 0.012  # lift before a new search [m]
 ROT_COMPLIANCE_ANGLE = math.radians(2.0)  # reference lead that loads the grasp to its limit
 SLIDE_FILTER_TIME = 0.1  # time constant of the lateral reaction filter in the slide [s]
+PROBE_TIME = 0.3  # pressing without lateral bias to read the edge's reaction [s]
+PROBE_FORCE = 0.5  # a lateral reaction above this gives the slide's direction [N]
+CATCH_TIME = 0.3  # the spiral held back this long: the rim is caught by the hole's edge [s]
 THREE_POINT_TIME = 0.3  # balanced and still this long: three-point contact [s]
 Z_FILTER_TIME = 0.1  # time constant of the TCP-height filter in the search [s]
 MAX_RETRIES = 3  # new searches after a wrong contact-state decision
@@ -269,11 +269,17 @@ class AssemblyModule:
         n = np.linalg.norm(v)
         return np.zeros(3) if n < 1e-9 else self.peg.radius * v / n
 
+    def _tilt_moment(self) -> float:
+        """Measured moment about the horizontal axes at the TCP [N m]: what tilts the peg in
+        the pads (about the pinch axis) or rocks it on them."""
+        w = self.robot.arm.wrench
+        return math.hypot(float(w[3]), float(w[4]))
+
     def _moment(self) -> float:
         """Measured moment about the pinch axis at the TCP (the pads) [N m]."""
         return float(np.dot(self.robot.arm.wrench[3:], self.tilt_axis))
 
-    def _comply(self, lateral: float, lateral_damping: float = 0.0, z_damping: float = 0.0,
+    def _comply(self, lateral: float, lateral_damping: float | None = None, z_damping: float = 0.0,
                 k_rot: float | None = None) -> None:
         """Admittance in contact.
 
@@ -293,7 +299,7 @@ class AssemblyModule:
         """
         if k_rot is None:
             k_rot = self.moment_limit / ROT_COMPLIANCE_ANGLE
-        d_lat = max(CONTACT_DAMPING, lateral_damping)
+        d_lat = CONTACT_DAMPING if lateral_damping is None else lateral_damping
         d_z = max(self.robot.cfg.force_damping, z_damping)
         self.robot.arm.admittance.set_stiffness(
             np.array([lateral, lateral, 0.0, k_rot, k_rot, k_rot]),
@@ -308,7 +314,7 @@ class AssemblyModule:
             target_xy = self.hole_xy
         else:
             # Recovery: lift, stand the peg upright about its lower end, search around here.
-            target_xy = (self._tip() + self._lowest_rim_offset(robot.arm.R_ref))[:2]
+            target_xy = self.hole_xy  # the hole lies within its radius of the nominal centre
             # Out of the hole first (above the first plane contact), then turn.
             p = robot.arm.p_ref.copy()
             p[2] = max(p[2] + RETRY_LIFT, self.z_contact + RETRY_LIFT)
@@ -336,10 +342,10 @@ class AssemblyModule:
         self.low_rim_from_tcp = (low + shift) - (p_tilt + shift)
         robot.arm.set_compliant(True)
         adm = robot.arm.admittance
-        self._comply(cfg.search_stiffness, k_rot=KS)
+        self._comply(cfg.search_stiffness)
         # Guarded descent: force control in z, moving at approach_speed in free air, pressing
         # with press_force once in contact.
-        self._comply(cfg.search_stiffness, k_rot=KS)
+        self._comply(cfg.search_stiffness)
         adm.wrench_des[:] = 0.0
         adm.wrench_des[2] = -adm.damping[2] * cfg.approach_speed
         while robot.arm.wrench[2] < cfg.contact_force:
@@ -361,7 +367,7 @@ class AssemblyModule:
         adm = robot.arm.admittance
         adm.wrench_des[:] = [0.0, 0.0, -cfg.press_force, 0.0, 0.0, 0.0]
         robot.arm.absorb_offset()
-        self._comply(cfg.search_stiffness, k_rot=KS)
+        self._comply(cfg.search_stiffness)
         center = robot.arm.p_ref[:2].copy()
         theta = 0.0
         b = cfg.spiral_pitch / (2 * math.pi)
@@ -375,12 +381,21 @@ class AssemblyModule:
         settle_ticks = int(round(SETTLE_TIME / robot.dt))
         p_ref = robot.arm.p_ref.copy()
         tick = 0
+        caught = 0
+        n_caught = max(1, int(round(CATCH_TIME / robot.dt)))
         while True:
             r = b * theta
             if r > cfg.search_radius:
                 theta, r = 0.0, 0.0  # start the spiral again from its centre
-            # d(theta)/dt = v / sqrt(r^2 + b^2): constant tangential speed on the spiral.
-            theta += cfg.spiral_speed * robot.dt / math.hypot(r, b * 2)
+            # The spiral advances while the grasp carries less than the moment limit; held
+            # back by the hole's edge (the rim caught in it), it waits: loading the pads
+            # further would only turn the peg in them.
+            if self._tilt_moment() < self.moment_limit:
+                # d(theta)/dt = v / sqrt(r^2 + b^2): constant tangential speed.
+                theta += cfg.spiral_speed * robot.dt / math.hypot(r, b * 2)
+                caught = 0
+            else:
+                caught += 1
             p_ref[2] = robot.arm.p_ref[2]
             p_ref[0] = center[0] + r * math.cos(theta)
             p_ref[1] = center[1] + r * math.sin(theta)
@@ -398,7 +413,9 @@ class AssemblyModule:
             settle_ticks -= 1
             # A drop below the recent height: the leading rim fell over the hole edge.
             z_max = window[0][1]
-            if settle_ticks < 0 and z_f < z_max - cfg.drop_threshold:
+            if settle_ticks < 0 and (z_f < z_max - cfg.drop_threshold or caught >= n_caught):
+                # A drop, or the rim held by an edge: two-point contact.
+                self.detected_by = "drop" if z_f < z_max - cfg.drop_threshold else "caught"
                 self.z_search = z_max
                 break
             self._check_timeout("search")
@@ -413,16 +430,27 @@ class AssemblyModule:
         adm = robot.arm.admittance
         robot.arm.absorb_offset()
         lead = self.low_rim_from_tcp[:2] / max(np.linalg.norm(self.low_rim_from_tcp[:2]), 1e-9)
-        # Lateral damping for a free sliding speed of slide_speed under the bias (z keeps it
-        # too: the press force holds it on the contact).
+        # Lateral damping for a free sliding speed of slide_speed under the bias.
         self._comply(0.0, lateral_damping=cfg.three_point_force / cfg.slide_speed)
-        adm.wrench_des[:] = [*(cfg.three_point_force * lead), -cfg.press_force, 0.0, 0.0, 0.0]
+        # Which way is the hole's centre (Fig. 3a): pressing with free lateral axes and no
+        # bias, the sum of the edge's reactions is the lateral force the sensor measures.
+        adm.wrench_des[:] = [0.0, 0.0, -cfg.slide_press_force, 0.0, 0.0, 0.0]
+        f_probe = np.zeros(2)
+        n_probe = max(1, int(round(PROBE_TIME / robot.dt)))
+        for _ in range(n_probe):
+            robot.tick()
+            self._watch()
+            f_probe += robot.arm.wrench[:2] / n_probe
+        if float(np.linalg.norm(f_probe)) > PROBE_FORCE:
+            lead = f_probe / float(np.linalg.norm(f_probe))
+        adm.wrench_des[:] = [*(cfg.three_point_force * lead), -cfg.slide_press_force, 0.0, 0.0, 0.0]
         f_lat = np.zeros(2)
         alpha = robot.dt / (SLIDE_FILTER_TIME + robot.dt)
         window = max(1, int(round(THREE_POINT_TIME / robot.dt)))
         still = 0
         start = robot.arm.tcp_pose()[0][:2]
         last = start
+        z_low = robot.arm.tcp_height()
         n = 0
         while True:
             robot.tick()
@@ -434,21 +462,17 @@ class AssemblyModule:
             if (np.linalg.norm(robot.arm.tcp_pose()[0][:2] - start) > self.peg.diameter
                     or robot.arm.tcp_height() > self.z_search + cfg.drop_threshold):
                 raise Recovery
+            z_low = min(z_low, robot.arm.tcp_height())
             if n % window == 0:
                 now = robot.arm.tcp_pose()[0][:2]
                 moving = np.linalg.norm(now - last) > 0.25 * cfg.slide_speed * THREE_POINT_TIME
                 last = now
                 balanced = float(np.dot(f_lat, lead)) < -0.7 * cfg.three_point_force
                 still = still + 1 if (balanced and not moving) else 0
-                if DEBUG:
-                    print(f"slide t={robot.time:.2f} f_lat={np.round(f_lat, 2)} lead={np.round(lead, 2)} "
-                          f"tcp={np.round(now * 1000, 2)} z={robot.arm.tcp_height() * 1000:.2f} "
-                          f"M={self._moment():.2f} tilt={math.degrees(self._commanded_tilt()):.1f} "
-                          f"off={np.round(adm.offset, 3)}")
                 if still >= 1:
                     break
             self._check_timeout("slide")
-        self.z_three = robot.arm.tcp_pose()[0][2]
+        self.z_three = min(z_low, robot.arm.tcp_height())
         if self.z_three > self.z_search - self.cfg.drop_threshold:
             raise Recovery  # the peg is back on the surface: the drop was not the hole
 

@@ -201,13 +201,12 @@ def sweep_figure(rows: Sequence[dict[str, Any]], cfg: ExperimentConfig, path: st
     ax.set(ylabel="assembly time [s] (simulated)")
     ax.set_title(title or "Assembly time against grasp offset")
     _moment_axis(ax, cfg, offsets)
-    align = [_phase_stats([r for r in ok if r["offset_mm"] == o], ("align", "insert"))
+    align = [_phase_stats([r for r in ok if r["offset_mm"] == o], ("align",))
              for o in offsets]
-    ax_a.scatter(x_ok, [r["time_align_s"] + r["time_insert_s"] for r in ok], s=8, color="C2",
-                 alpha=0.25, lw=0)
+    ax_a.scatter(x_ok, [r["time_align_s"] for r in ok], s=8, color="C2", alpha=0.25, lw=0)
     ax_a.errorbar(offsets, [a[0] for a in align], yerr=[a[1] for a in align], color="C2",
-                  marker="o", capsize=3, label="align + insert, mean +- std")
-    ax_a.set(ylabel="align + insert [s]")
+                  marker="o", capsize=3, label="alignment, mean +- std")
+    ax_a.set(ylabel="alignment time [s]")
     ax_a.legend(fontsize=8)
     ax_s.bar(offsets, [100 * s["success_rate"] for s in summary], width=0.6 * spacing,
              color="C7")
