@@ -33,8 +33,10 @@ def cell() -> Cell:
     return Cell(cfg.cell, cfg.controller.joint_kp, cfg.controller.joint_kv)
 
 
-def hold_and_measure(cell: Cell, offset: float) -> dict[str, float]:
-    """Grasp at ``offset`` along the peg axis, lift, settle; average the reading over 0.5 s."""
+def grasp_and_lift(cell: Cell, offset: float) -> tuple[Robot, float]:
+    """Reset, lay the peg at a fixed pose, tare above it with the gripper empty, grasp at
+    ``offset`` along the peg axis with the real grasp primitive and lift; return the robot and
+    the realised offset (ground truth)."""
     cfg = profile("paper")
     cell.reset(np.random.default_rng(0))
     cell.set_peg_lying(*PEG_XY, PEG_YAW)
@@ -46,6 +48,12 @@ def hold_and_measure(cell: Cell, offset: float) -> dict[str, float]:
     robot.ft.tare()  # gripper empty, at the pose the peg will be lifted to
     result = grasp(robot, x, y, PEG_YAW, 2 * cell.cfg.peg.radius)
     assert result.success
+    return robot, result.offset
+
+
+def hold_and_measure(cell: Cell, offset: float) -> dict[str, float]:
+    """Grasp at ``offset`` along the peg axis, lift, settle; average the reading over 0.5 s."""
+    robot, realised = grasp_and_lift(cell, offset)
     robot.run(1.0)
     torque, force, lever, tilt = [], [], [], []
     d, ids = cell.data, cell.ids
@@ -59,7 +67,7 @@ def hold_and_measure(cell: Cell, offset: float) -> dict[str, float]:
         lever.append(float(np.dot(p_peg - d.site_xpos[ids.ft_site], pads)))
         tilt.append(math.degrees(math.asin(min(1.0, abs(R_peg[2, 2])))))
     return {"torque": float(np.mean(torque)), "force": float(np.mean(force)),
-            "lever": float(np.mean(lever)), "tilt": max(tilt), "realised": result.offset}
+            "lever": float(np.mean(lever)), "tilt": max(tilt), "realised": realised}
 
 
 @pytest.mark.slow

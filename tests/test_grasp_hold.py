@@ -14,18 +14,14 @@ from __future__ import annotations
 
 import math
 
-import mujoco
-import numpy as np
 import pytest
 
-from vgs.assembly.grasp import LIFT_HEIGHT, grasp, tool_rotation
+from test_cell_ft_torque import grasp_and_lift
 from vgs.config import profile
 from vgs.control.robot import Robot
 from vgs.sim.cell import Cell
 from vgs.sim.rg2 import grasp_moment_capacity
 
-PEG_XY = np.array([0.42, -0.12])
-PEG_YAW = 0.3
 RAMP_RATE = 0.05  # N m per second: slow against the grasp's dynamics
 
 
@@ -33,14 +29,7 @@ def held_peg(offset: float) -> tuple[Cell, Robot]:
     """Grasp the peg ``offset`` metres from its centre along its axis and lift it."""
     cfg = profile("paper")
     cell = Cell(cfg.cell, cfg.controller.joint_kp, cfg.controller.joint_kv)
-    cell.reset(np.random.default_rng(0))
-    cell.set_peg_lying(*PEG_XY, PEG_YAW)
-    mujoco.mj_forward(cell.model, cell.data)
-    robot = Robot(cell, cfg.controller, np.random.default_rng(1))
-    axis = np.array([math.cos(PEG_YAW), math.sin(PEG_YAW)])
-    x, y = PEG_XY + offset * axis
-    robot.move_to(np.array([x, y, LIFT_HEIGHT]), tool_rotation(PEG_YAW), speed=0.3, settle=0.3)
-    assert grasp(robot, x, y, PEG_YAW, 2 * cell.cfg.peg.radius).success
+    robot, _ = grasp_and_lift(cell, offset)
     robot.run(0.5)
     return cell, robot
 

@@ -224,7 +224,8 @@ def cmd_sweep(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
                      seed=cfg.seed if args.seed is None else args.seed)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)  # an unusable --out fails now, not after the sweep
-    summary = sweep_to_folder(cfg, spec, out, workers=args.workers)
+    summary = sweep_to_folder(cfg, spec, out, workers=args.workers,
+                              progress=not args.no_progress)
     print(f"{'offset [mm]':>11}  {'n':>3}  {'success':>7}  {'mean [s]':>8}  {'std [s]':>7}  "
           f"{'min [s]':>7}  {'max [s]':>7}")
     for s in summary:
@@ -486,6 +487,7 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--seed", type=seed_arg, help="root seed (default: the profile's seed)")
     sweep.add_argument("--workers", type=int,
                        help="worker processes (default: the number of CPU cores)")
+    sweep.add_argument("--no-progress", action="store_true", help="no progress bar")
     sweep.set_defaults(func=cmd_sweep)
 
     scene = sub.add_parser("export-scene", parents=[common],

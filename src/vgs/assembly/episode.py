@@ -82,11 +82,13 @@ class GraspWatch:
     controller): how far the peg turns in the pads, and the largest moment about the pinch
     axis (tool y) that the pads' contact forces exert on the peg, about the TCP.
 
-    Attached to :attr:`vgs.control.robot.Robot.observers` after the grasp; it stops
-    looking when the robot starts to release the peg.
+    Attached to :attr:`vgs.control.robot.Robot.observers` after the grasp; it samples every
+    ``every``-th control tick (25 Hz by default, so a peak is the largest sampled moment) and
+    stops looking when the robot starts to release the peg. ``turn_deg`` is the largest angle
+    between the peg's axis in the tool frame and its axis at the start.
     """
 
-    def __init__(self, robot: Robot, every: int = 2) -> None:
+    def __init__(self, robot: Robot, every: int = 4) -> None:
         self.robot = robot
         self.cell = robot.cell
         self.every = every
@@ -98,7 +100,8 @@ class GraspWatch:
         ids = self.cell.ids
         m = self.cell.model
         finger_bodies = {int(m.geom_bodyid[g]) for g in ids.pad_geoms}
-        self._pads = {g for g in range(m.ngeom) if int(m.geom_bodyid[g]) in finger_bodies}
+        self._is_finger = np.array([int(m.geom_bodyid[g]) in finger_bodies
+                                    for g in range(m.ngeom)])
         self._peg = int(ids.peg_geom)
 
     def _relative(self) -> np.ndarray:
@@ -114,23 +117,33 @@ class GraspWatch:
         if self._n % self.every:
             return
         cos = float(np.dot(self._relative(), self._R0))
-        self.turn_deg = math.degrees(math.acos(max(-1.0, min(1.0, cos))))
+        self.turn_deg = max(self.turn_deg,
+                            math.degrees(math.acos(max(-1.0, min(1.0, cos)))))
         m, d, ids = self.cell.model, self.cell.data, self.cell.ids
+        ncon = d.ncon
+        if ncon == 0:
+            return
+        geom = d.contact.geom[:ncon]
+        on_peg = (geom[:, 0] == self._peg) | (geom[:, 1] == self._peg)
+        on_finger = self._is_finger[geom].any(axis=1)
+        rows = np.flatnonzero(on_peg & on_finger)
+        if rows.size == 0:
+            self.peak_moment = max(self.peak_moment, 0.0)
+            return
         tcp = d.site_xpos[ids.tcp_site]
         pinch = d.site_xmat[ids.tcp_site].reshape(3, 3)[:, 1]
         moment = 0.0
-        for i in range(d.ncon):
-            c = d.contact[i]
-            g1, g2 = int(c.geom[0]), int(c.geom[1])
-            if self._peg not in (g1, g2) or not ({g1, g2} & self._pads):
-                continue
+        for i in rows.tolist():
             mujoco.mj_contactForce(m, d, i, self._f)
-            frame = c.frame.reshape(3, 3)
+            frame = d.contact.frame[i].reshape(3, 3)
             f = frame.T @ self._f[:3]  # on geom2, world frame
             # Torsional friction: a torque about the contact normal (frame's first row).
-            tau = self._f[3] * frame[0] if c.dim >= 4 else 0.0
-            sign = -1.0 if g1 == self._peg else 1.0
-            moment += sign * float(np.dot(np.cross(c.pos - tcp, f) + tau, pinch))
+            tau = self._f[3] * frame[0] if d.contact.dim[i] >= 4 else 0.0
+            sign = -1.0 if geom[i, 0] == self._peg else 1.0
+            rx, ry, rz = (d.contact.pos[i] - tcp).tolist()
+            fx, fy, fz = f.tolist()
+            torque = np.array([ry * fz - rz * fy, rz * fx - rx * fz, rx * fy - ry * fx]) + tau
+            moment += sign * float(np.dot(torque, pinch))
         self.peak_moment = max(self.peak_moment, abs(moment))
 
 

@@ -33,11 +33,12 @@ class EpisodeRecord:
         insertion_depth_mm: Ground truth depth of the peg's lower end below the entrance [mm].
         peak_moment_measured: Largest moment about the pinch axis the controller measured with
             the F/T sensor in contact [N m].
-        peg_turn_deg: Ground truth (analysis only): how far the peg turned in the pads between
-            the end of the grasp and the end of the assembly [deg].
+        peg_turn_deg: Ground truth (analysis only): the largest angle by which the peg's axis
+            turned in the pads (in the tool frame) between the end of the grasp and the release,
+            sampled at 25 Hz [deg].
         peak_grasp_moment: Ground truth (analysis only): largest moment about the pinch axis
-            that the pads' contact forces exerted on the peg, about the TCP, sampled every
-            control tick of the assembly [N m].
+            that the fingers' contact forces exerted on the peg, about the TCP, sampled at 25 Hz
+            during the assembly [N m].
     """
 
     seed: int

@@ -279,7 +279,8 @@ class AssemblyModule:
         """Measured moment about the pinch axis at the TCP (the pads) [N m]."""
         return float(np.dot(self.robot.arm.wrench[3:], self.tilt_axis))
 
-    def _comply(self, lateral: float, lateral_damping: float | None = None, z_damping: float = 0.0,
+    def _comply(self, lateral: float, lateral_damping: float | None = None,
+                z_damping: float | None = None,
                 k_rot: float | None = None) -> None:
         """Admittance in contact.
 
@@ -300,7 +301,7 @@ class AssemblyModule:
         if k_rot is None:
             k_rot = self.moment_limit / ROT_COMPLIANCE_ANGLE
         d_lat = CONTACT_DAMPING if lateral_damping is None else lateral_damping
-        d_z = max(self.robot.cfg.force_damping, z_damping)
+        d_z = self.robot.cfg.force_damping if z_damping is None else z_damping
         self.robot.arm.admittance.set_stiffness(
             np.array([lateral, lateral, 0.0, k_rot, k_rot, k_rot]),
             damping=np.array([d_lat, d_lat, d_z, ROT_DAMPING, ROT_DAMPING, ROT_DAMPING]))

@@ -86,6 +86,7 @@ class ArmController:
         self._p_ft_tcp = self._ft_xmat.T @ (self._tcp_xpos - self._ft_xpos)
         self.payload_mass = self._tool_mass
         self.payload_com = self._tool_com.copy()
+        self._payload_com_t = tuple(self.payload_com.tolist())
         self._g_tare = np.zeros(6)
         self._g_now = np.zeros(6)
         self._compensate = False
@@ -95,13 +96,20 @@ class ArmController:
         pads) besides the tool's own load; takes effect at the next :meth:`tare`."""
         m = self._tool_mass + peg_mass
         self.payload_com = (self._tool_mass * self._tool_com + peg_mass * self._p_ft_tcp) / m
+        self._payload_com_t = tuple(self.payload_com.tolist())
         self.payload_mass = m
 
     def _gravity_wrench(self, out: np.ndarray) -> np.ndarray:
-        """The payload's weight as an external wrench on the tool, sensor frame."""
-        g = self._ft_xmat.T @ np.array([0.0, 0.0, -GRAVITY * self.payload_mass])
-        out[:3] = g
-        out[3:] = np.cross(self.payload_com, g)
+        """The payload's weight as an external wrench on the tool, sensor frame:
+        ``f = R_world_ft^T (0, 0, -m g)``, ``tau = c x f`` (scalar arithmetic: numpy's
+        cross product costs more than the whole sum on 3-vectors)."""
+        w = -GRAVITY * self.payload_mass
+        gx, gy, gz = (w * self._ft_xmat[2]).tolist()  # third row of R: world z in the ft frame
+        cx, cy, cz = self._payload_com_t
+        out[0], out[1], out[2] = gx, gy, gz
+        out[3] = cy * gz - cz * gy
+        out[4] = cz * gx - cx * gz
+        out[5] = cx * gy - cy * gx
         return out
 
     def tare(self) -> None:
