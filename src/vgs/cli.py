@@ -232,7 +232,11 @@ def cmd_sweep(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
         cells = [s[k] for k in ("time_mean_s", "time_std_s", "time_min_s", "time_max_s")]
         times = "  ".join(f"{'-':>8}" if v is None else f"{v:8.2f}" for v in cells)
         print(f"{s['offset_mm']:11.1f}  {s['n']:3d}  {100 * s['success_rate']:6.0f}%  {times}")
-    paired = json.loads((out / "summary.json").read_text())["paired"]
+    doc = json.loads((out / "summary.json").read_text())
+    paired = doc["paired"]
+    if len(doc.get("hosts", [])) > 1:
+        print(f"\nnote: the rows come from several hosts ({'; '.join(doc['hosts'])}); the same "
+              "scene can end differently on another CPU")
     if paired["vs_center"]:
         print("\npaired against the centre grasp (same scenes; both assembled), 95 % CI:")
         for e in paired["vs_center"]:
@@ -240,9 +244,10 @@ def cmd_sweep(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
             print(f"{e['offset_mm']:11.1f}  dT {_num(e['time_diff_s'])} s [{_num(lo)}, "
                   f"{_num(hi)}]  pairs {e['pairs']}")
     slope = paired["slope"]
-    lo, hi = slope["time_ci_s_per_mm"]
-    print(f"time vs |offset|: {_num(slope['time_s_per_mm'], 3)} s/mm [{_num(lo, 3)}, "
-          f"{_num(hi, 3)}]")
+    if slope["time_s_per_mm"] is not None:
+        lo, hi = slope["time_ci_s_per_mm"]
+        print(f"time vs |offset|: {_num(slope['time_s_per_mm'], 3)} s/mm [{_num(lo, 3)}, "
+              f"{_num(hi, 3)}]")
     print(f"\nwrote {out / 'sweep.csv'}, {out / 'sweep.png'}, {out / 'summary.json'}")
     return 0
 

@@ -32,6 +32,7 @@ from vgs.assembly.record import PHASES
 from vgs.config import CellConfig, ExperimentConfig, PegConfig
 from vgs.errors import ConfigError, VGSError
 from vgs.jsonsafe import json_safe
+from vgs.runfolder import host, hosts_of
 from vgs.sim.rg2 import PAD_HALF
 
 GRAVITY = 9.81
@@ -42,7 +43,8 @@ COLUMNS: tuple[str, ...] = (
     "offset_mm", "mass_kg", "length_mm", "success", "assembly_time_s",
     *(f"time_{p}_s" for p in PHASES),
     "adjustments", "retries", "failure_reason", "seed", "trial", "grasp_offset_mm",
-    "peg_turn_deg", "peak_grasp_moment_nm", "peak_moment_measured_nm",
+    "peg_turn_deg", "peak_grasp_moment_nm", "peak_moment_measured_nm", "host_cpu",
+    "mujoco_version",
 )
 BOOTSTRAP_RESAMPLES = 2000
 
@@ -178,6 +180,7 @@ def _run_trial(trial: Trial) -> tuple[int, dict[str, Any]]:
         "peg_turn_deg": row["peg_turn_deg"],
         "peak_grasp_moment_nm": row["peak_grasp_moment"],
         "peak_moment_measured_nm": row["peak_moment_measured"],
+        **host(),  # MuJoCo's floating point differs between CPUs: rows say where they ran
     }
     return trial.index, out
 
@@ -328,7 +331,7 @@ def sweep_to_folder(cfg: ExperimentConfig, spec: SweepSpec, out: Path,
     summary = summarize(rows)
     doc = {"profile": cfg.name, "seed": spec.seed, "trials": spec.trials,
            "mass_range": spec.mass_range, "length_range": spec.length_range,
-           "offsets": summary, "paired": paired_analysis(rows)}
+           "offsets": summary, "paired": paired_analysis(rows), "hosts": hosts_of(rows)}
     (out / "summary.json").write_text(json.dumps(json_safe(doc), indent=2) + "\n")
     return summary
 
