@@ -1,38 +1,49 @@
 """Compliance-based peg-in-hole assembly (paper Section 3.2, Figure 5) as a state machine.
 
 Phases, each with its own timeout, every decision from the F/T signal and the robot's own joint
-state (never the hole's true pose, never the contact list):
+state (never the hole's true pose, the peg's true pose or the contact list). The module knows
+the nominal product data (peg length, diameter, mass), the nominal hole position and its own
+hardware (the grasp's moment capacity, the tool's mass); it is not told where the peg is held
+and does not estimate it. docs/assembly.md states every phase with its numbers.
 
 ``transport``
-    With the peg still horizontal, the tared F/T reading gives the peg's weight ``f_z = m g`` and
-    the moment of its centre of mass about the pads, ``tau_y = -m g c`` (``c``: the centre's
-    position along the pads' long side). The wrist turns the peg upright about the pinch axis
-    so that the longer part hangs down (``c`` sets which way), and carries it above the
-    *nominal* hole position. The estimated hanging length is ``h = L_nominal / 2 + |c|``.
+    With the peg still horizontal, the sign of the tared F/T moment ``tau_y = -m g c`` about
+    the pads says which end is longer; the wrist turns the peg upright about the pinch axis so
+    that end hangs down, to the same arm/gripper/peg pose for either end, and carries it above
+    the *nominal* hole, high enough for the longest peg the product data allows. Pivots "about
+    the lower end" use the nominal half length from then on.
 ``approach``
-    The F/T sensor is tared once at this nominal upright pose. The peg is tilted by the search
-    tilt about the pinch axis (around its estimated lower end) and lowered in a guarded move until
-    the vertical contact force exceeds ``contact_force``: plane contact (Figure 2a).
+    The nominal peg is added to the payload model and the F/T sensor is tared once at this
+    upright pose (the payload's weight is compensated from then on). The peg is tilted by the
+    search tilt about the pinch axis, a fixed world direction, and lowered in a guarded
+    force-controlled descent until the vertical contact force exceeds ``contact_force``: plane
+    contact (Figure 2a).
 ``search``
     Force control in z (press with ``press_force``), the lowest rim point driven along an
     Archimedes spiral ``r = pitch * theta / (2 pi)`` around the nominal hole centre at constant
-    tangential speed. When the TCP drops ``drop_threshold`` below the plane-contact height, the
-    leading rim point has fallen over the hole edge: two-point contact (Figure 2b).
+    tangential speed; the spiral waits while the measured tilting moment exceeds the moment
+    limit. A drop of the filtered TCP height by ``drop_threshold`` below its recent maximum, or
+    the spiral held back for ``CATCH_TIME``: two-point contact (Figure 2b).
 ``slide``
-    Pressing on, the lateral axes become force-controlled with a bias force towards the lowest
-    rim point; the hole's reaction (pointing to the hole centre, Figure 3a) and the bias slide
-    the peg until the leading rim meets the far wall and the lateral motion stops: three-point
-    contact (Figure 2c).
+    A short probe with free lateral axes reads the sum of the edge's reactions, which points to
+    the hole's centre (Figure 3a); a lateral bias along it slides the peg until the measured
+    lateral force balances the bias and the TCP stands still: three-point contact (Figure 2c).
+    Back at the search height, or further than a diameter: the drop was not the hole.
 ``align``
-    Wiggle alignment: each adjustment rotates the peg back towards upright about its estimated
-    lower end by an amount set by the measured contact moment, superposes one wiggle
-    oscillation, and checks whether the peg has slid into the hole (TCP below the three-point
-    height by ``entry_depth``) with a small moment. The measured moment contains the peg's
-    gravitational and inertial disturbing moments about the pads (paper eq. 2, 3), which depend
-    on where the peg is held: the controller cannot tell them from contact moments.
+    Wiggle alignment, bias cleared: each adjustment rotates the peg back towards upright about
+    its nominal lower end by an amount set by the measured contact moment, superposes one
+    wiggle, each rotation stopped at the moment limit, and checks whether the peg has slid into
+    the hole (TCP below the three-point height by ``ENTRY_DEPTH``) with a small moment. The
+    measured moment contains the peg's gravitational and inertial disturbing moments about the
+    pads (paper eq. 2, 3), which depend on where the peg is held: the controller cannot tell
+    them from contact moments.
 ``insert``
     Force-controlled push to the insertion depth K; a stall triggers one more wiggle adjustment.
     Then the gripper opens and the arm retracts.
+
+In every contact phase the rotational admittance keeps the moment on the grasp under
+``assembly.moment_limit_fraction`` of its capacity, and the grasp watch (finger width; the
+weight in free air) ends a lost peg with :class:`PegLost` (``peg_lost``), never as an insertion.
 """
 
 from __future__ import annotations
@@ -314,8 +325,9 @@ class AssemblyModule:
             robot.arm.tare()  # once, at the nominal upright pose
             target_xy = self.hole_xy
         else:
-            # Recovery: lift, stand the peg upright about its lower end, search around here.
-            target_xy = self.hole_xy  # the hole lies within its radius of the nominal centre
+            # Recovery: out of the hole, upright again, and a new search around the nominal
+            # hole (it lies within its radius of the nominal centre).
+            target_xy = self.hole_xy
             # Out of the hole first (above the first plane contact), then turn.
             p = robot.arm.p_ref.copy()
             p[2] = max(p[2] + RETRY_LIFT, self.z_contact + RETRY_LIFT)
@@ -325,7 +337,7 @@ class AssemblyModule:
             self._check_weight()
         self._check_grasp()
         p, R = robot.arm.p_ref.copy(), self.R_asm.copy()
-        # Tilt about the pinch axis around the estimated lower end.
+        # Tilt about the pinch axis around the nominal lower end.
         axis = self.tilt_axis
         psi = math.radians(cfg.search_tilt_deg)
         Rt = exp_so3(psi * axis)
@@ -343,7 +355,6 @@ class AssemblyModule:
         self.low_rim_from_tcp = (low + shift) - (p_tilt + shift)
         robot.arm.set_compliant(True)
         adm = robot.arm.admittance
-        self._comply(cfg.search_stiffness)
         # Guarded descent: force control in z, moving at approach_speed in free air, pressing
         # with press_force once in contact.
         self._comply(cfg.search_stiffness)
