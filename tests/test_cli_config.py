@@ -75,3 +75,13 @@ def test_main_reports_one_line(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["demo", "--peg-mass", "-1"]) == 2
     err = capsys.readouterr().err
     assert err == "vgs: error: peg.mass: must be a positive number, got -1.0\n"
+
+
+def test_version(capsys: pytest.CaptureFixture[str]) -> None:
+    from vgs import __version__
+    from vgs.cli import main
+
+    with pytest.raises(SystemExit) as info:
+        main(["--version"])
+    assert info.value.code == 0
+    assert capsys.readouterr().out.strip() == f"vgs {__version__}"

@@ -452,6 +452,9 @@ def build_parser() -> argparse.ArgumentParser:
     common = _common()
     parser = _Parser(prog="vgs", description="Visual grasping strategy for peg-in-hole "
                                              "assembly (UR5 + RG2 in MuJoCo).")
+    from vgs import __version__
+
+    parser.add_argument("--version", action="version", version=f"vgs {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     demo = sub.add_parser("demo", parents=[common], help="one whole episode with a figure")
