@@ -128,7 +128,6 @@ class GraspWatch:
         on_finger = self._is_finger[geom].any(axis=1)
         rows = np.flatnonzero(on_peg & on_finger)
         if rows.size == 0:
-            self.peak_moment = max(self.peak_moment, 0.0)
             return
         tcp = d.site_xpos[ids.tcp_site]
         pinch = d.site_xmat[ids.tcp_site].reshape(3, 3)[:, 1]

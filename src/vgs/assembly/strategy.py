@@ -459,7 +459,6 @@ class AssemblyModule:
         f_lat = np.zeros(2)
         alpha = robot.dt / (SLIDE_FILTER_TIME + robot.dt)
         window = max(1, int(round(THREE_POINT_TIME / robot.dt)))
-        still = 0
         start = robot.arm.tcp_pose()[0][:2]
         last = start
         z_low = robot.arm.tcp_height()
@@ -480,8 +479,7 @@ class AssemblyModule:
                 moving = np.linalg.norm(now - last) > 0.25 * cfg.slide_speed * THREE_POINT_TIME
                 last = now
                 balanced = float(np.dot(f_lat, lead)) < -0.7 * cfg.three_point_force
-                still = still + 1 if (balanced and not moving) else 0
-                if still >= 1:
+                if balanced and not moving:
                     break
             self._check_timeout("slide")
         self.z_three = min(z_low, robot.arm.tcp_height())

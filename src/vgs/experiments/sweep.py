@@ -16,10 +16,12 @@ missing.
 from __future__ import annotations
 
 import csv
+import json
 import math
 import multiprocessing as mp
 import os
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -228,7 +230,6 @@ def read_journal(path: Path, trials: Sequence[Trial]) -> dict[int, dict[str, Any
     Raises:
         VGSError: Naming the file and line of a row the plan does not hold.
     """
-    import json
 
     rows: dict[int, dict[str, Any]] = {}
     if not path.exists():
@@ -262,30 +263,19 @@ def read_journal(path: Path, trials: Sequence[Trial]) -> dict[int, dict[str, Any
 _FLOAT_COLUMNS = frozenset(c for c in COLUMNS if c.endswith(("_s", "_mm", "_deg", "_nm", "_kg")))
 
 
-class _appender:
-    """Context manager: a function that appends one strict-JSON row to the journal."""
-
-    def __init__(self, path: Path | None) -> None:
-        self.path = path
-        self.fh: Any = None
-
-    def __enter__(self) -> Any:
-        import json
-
-        if self.path is None:
-            return lambda row: None
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self.fh = self.path.open("a")
-
+@contextmanager
+def _appender(path: Path | None) -> Iterator[Callable[[dict[str, Any]], None]]:
+    """A function that appends one strict-JSON row to the journal ``path`` (none: drops it)."""
+    if path is None:
+        yield lambda row: None
+        return
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("a") as fh:
         def write(row: dict[str, Any]) -> None:
-            self.fh.write(json.dumps(json_safe(row), allow_nan=False) + "\n")
-            self.fh.flush()
+            fh.write(json.dumps(json_safe(row), allow_nan=False) + "\n")
+            fh.flush()
 
-        return write
-
-    def __exit__(self, *exc: object) -> None:
-        if self.fh is not None:
-            self.fh.close()
+        yield write
 
 
 def _results(cfg: ExperimentConfig, trials: list[Trial],
@@ -316,7 +306,6 @@ def sweep_to_folder(cfg: ExperimentConfig, spec: SweepSpec, out: Path,
     Returns:
         The per-offset summary (:func:`summarize`).
     """
-    import json
 
     from vgs.experiments.plots import sweep_figure
 
