@@ -85,3 +85,117 @@ def test_version(capsys: pytest.CaptureFixture[str]) -> None:
         main(["--version"])
     assert info.value.code == 0
     assert capsys.readouterr().out.strip() == f"vgs {__version__}"
+
+
+# -- each command takes only the flags it uses ----------------------------------------------
+
+# The positional arguments and required flags of each command, so that it parses.
+REQUIRED = {
+    "demo": [], "sweep": [], "export-scene": [], "export-policy": ["RUN", "--out", "w.pt"],
+    "model-info": [], "train": ["--mode", "vgs", "--out", "x"], "heatmap": ["RUN", "--out", "x"],
+    "curves": ["RUN", "--out", "x"], "evaluate": ["--policy", "center", "--out", "x"],
+    "reproduce": ["--out", "x"], "report": ["DIR"], "seeds": ["DIR", "--out", "x"],
+    "status": ["DIR"], "config": [],
+}
+# Commands that build their configuration from a profile and the cell's override flags.
+CONFIGURED = {"demo", "sweep", "export-scene", "train", "evaluate", "reproduce", "config"}
+# Commands that draw a progress bar (tqdm: vgs.experiments.sweep, .train, .evaluate).
+PROGRESS_BARS = {"sweep", "train", "evaluate", "reproduce"}
+
+
+def _takes(command: str, *flags: str) -> bool:
+    import argparse
+
+    from vgs.cli import UsageError
+
+    try:
+        _, extra = build_parser().parse_known_args([command, *REQUIRED[command], *flags])
+    except (UsageError, argparse.ArgumentError):
+        return False
+    return not extra
+
+
+def test_the_table_names_every_command() -> None:
+    import argparse
+
+    sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    assert set(sub.choices) == set(REQUIRED)
+
+
+@pytest.mark.parametrize("command", sorted(REQUIRED))
+def test_each_command_takes_only_the_flags_it_uses(command: str) -> None:
+    assert _takes(command, "--peg-mass", "0.6") == (command in CONFIGURED)
+    assert _takes(command, "--profile", "smoke") == (command in CONFIGURED | {"model-info"})
+    assert _takes(command, "--set", "network.backbone=light") == (
+        command in CONFIGURED | {"model-info"})
+    assert _takes(command, "--no-progress") == (command in PROGRESS_BARS)
+
+
+def test_every_module_with_a_progress_bar_is_known() -> None:
+    """A new progress bar needs --no-progress on its commands: add them to PROGRESS_BARS."""
+    from pathlib import Path
+
+    import vgs
+
+    root = Path(vgs.__file__).parent
+    with_bar = {p.relative_to(root).as_posix() for p in root.rglob("*.py")
+                if "tqdm" in p.read_text()}
+    assert with_bar == {"experiments/sweep.py", "experiments/train.py",
+                        "experiments/evaluate.py"}
+
+
+def test_report_refuses_a_configuration_flag(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["report", "DIR", "--peg-mass", "5"]) == 2
+    assert capsys.readouterr().err == ("vgs: error: report: does not take --peg-mass 5 (vgs "
+                                       "report --help lists what it takes)\n")
+
+
+def test_model_info_takes_network_keys_only() -> None:
+    args = build_parser().parse_args(["model-info", "--set", "network.num_rotations=4"])
+    assert config_from_args(args).network.num_rotations == 4
+    args = build_parser().parse_args(["model-info", "--set", "train.episodes=4"])
+    with pytest.raises(ConfigError) as info:
+        config_from_args(args)
+    assert info.value.field == "set" and "network.*" in info.value.message
+
+
+# -- vgs config: every key, its value and its documentation -----------------------------------
+
+
+@pytest.mark.parametrize("name", ["smoke", "quick", "medium", "paper"])
+def test_every_settable_key_has_a_doc(name: str) -> None:
+    from vgs.config import profile
+    from vgs.configdoc import settings
+
+    items = settings(profile(name))
+    assert [s.key for s in items if not s.doc] == []
+    keys = [s.key for s in items]
+    assert len(keys) == len(set(keys)) and "network.backbone" in keys
+    assert "cell.peg" not in keys  # sections are not keys
+
+
+def test_field_docs_and_first_sentences() -> None:
+    from vgs.config import HoleConfig, NetworkConfig
+    from vgs.configdoc import field_docs, first_sentence, format_settings, settings
+
+    docs = field_docs(HoleConfig)
+    assert docs["depth"] == "Depth of the hole [m]; must exceed the insertion depth K."
+    assert docs["segments"].startswith("Number of convex wedges") and "  " not in docs["segments"]
+    assert first_sentence(docs["segments"]) == ("Number of convex wedges that approximate the "
+                                                "round hole.")
+    assert first_sentence("Displace it (paper 3.2), i.e. within r. Next.") == (
+        "Displace it (paper 3.2), i.e. within r.")
+    assert first_sentence("A (one. Two) b. C") == "A (one. Two) b."
+    text = format_settings(settings(NetworkConfig(backbone="light", weights=None)))
+    assert "backbone" in text and "= light " in text and "= None " in text
+    assert "# densenet121 (paper) or light (fast CPU runs)." in text  # markup removed
+
+
+def test_config_prints_what_set_resolves(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["config", "--profile", "smoke", "--set", "assembly.press_force=4",
+                 "--set", "reproduce.conditions=nominal,mass"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("# profile smoke, resolved")
+    lines = {line.split(" = ")[0].strip(): line for line in out.splitlines()}
+    assert "= 4.0 " in lines["assembly.press_force"]
+    assert "= ('nominal', 'mass') " in lines["reproduce.conditions"]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 import shutil
 import subprocess
 import sys
@@ -88,6 +89,14 @@ def test_model_info(tmp_path: Path) -> None:
         (("export-scene", "--peg-mass", "abc"), "argument --peg-mass"),
         (("frobnicate",), "argument COMMAND"),
         (("seeds", "nowhere", "--out", "x"), "seeds"),
+        # each command takes only the flags it uses
+        (("report", "DIR", "--peg-mass", "5"), "report"),
+        (("heatmap", "RUN", "--out", "x.png", "--profile", "smoke"), "heatmap"),
+        (("model-info", "--peg-mass", "5"), "model-info"),
+        (("model-info", "--set", "cell.peg.mass=5"), "set"),
+        (("config", "--set", "assembly.no_such_key=4"), "assembly.no_such_key"),
+        (("config", "--set", "cell.peg=4"), "cell.peg"),
+        (("config", "--set", "assembly.press_force=-4"), "assembly.press_force"),
     ],
 )
 def test_bad_input_one_line_exit_2(tmp_path: Path, argv: tuple[str, ...], field: str) -> None:
@@ -97,6 +106,25 @@ def test_bad_input_one_line_exit_2(tmp_path: Path, argv: tuple[str, ...], field:
     lines = proc.stderr.splitlines()
     assert len(lines) == 1, proc.stderr
     assert lines[0].startswith(f"vgs: error: {field}: ")
+
+
+def test_config_lists_every_key_with_its_value_and_doc(tmp_path: Path) -> None:
+    proc = vgs("config", "--profile", "paper", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.splitlines()
+    backbone = next(line for line in lines if line.startswith("network.backbone "))
+    _, value, doc = (part.strip() for part in re.split(r" = |  # ", backbone, maxsplit=2))
+    assert value == "densenet121" and "light" in doc
+    assert any(line.startswith("cell.peg.mass ") for line in lines)
+    changed = vgs("config", "--profile", "quick", "--set", "assembly.press_force=4",
+                  "--peg-mass", "0.6", cwd=tmp_path)
+    assert changed.returncode == 0, changed.stderr
+    values = {line.split(" = ")[0].strip(): line.split(" = ")[1].split("  # ")[0].strip()
+              for line in changed.stdout.splitlines() if " = " in line}
+    assert values["assembly.press_force"] == "4.0" and values["cell.peg.mass"] == "0.6"
+    assert values["network.backbone"] == "light"  # the quick profile's
+    doc = json.loads(vgs("config", "--json", cwd=tmp_path).stdout)
+    assert {"key": "cell.peg.mass", "value": 0.55, "doc": "Peg mass [kg]."} in doc
 
 
 @pytest.mark.slow

@@ -27,7 +27,7 @@ def test_train_then_heatmap(tmp_path: Path) -> None:
     lines = (run / "episodes.csv").read_text().strip().splitlines()
     assert len(lines) == 3 and lines[0].startswith("episode,mode,seed")
     fig = tmp_path / "heat.png"
-    result = vgs("heatmap", str(run), "--out", str(fig), "--scenes", "1", *SMALL)
+    result = vgs("heatmap", str(run), "--out", str(fig), "--scenes", "1")  # the run's config
     assert result.returncode == 0, result.stderr
     assert fig.stat().st_size > 10_000
     curves = tmp_path / "curves.png"
@@ -39,15 +39,21 @@ def test_train_then_heatmap(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("args", "field"),
     [
-        (["train", "--mode", "vgs", "--out", "x", "--set", "agent.gamma=2"], "agent.gamma"),
-        (["train", "--mode", "vgs", "--out", "x", "--episodes", "0"], "train.episodes"),
-        (["train", "--mode", "vgs", "--out", "x", "--backbone", "resnet"], "network.backbone"),
+        (["train", "--mode", "vgs", "--out", "x", "--set", "agent.gamma=2", "--profile",
+          "smoke"], "agent.gamma"),
+        (["train", "--mode", "vgs", "--out", "x", "--episodes", "0", "--profile", "smoke"],
+         "train.episodes"),
+        (["train", "--mode", "vgs", "--out", "x", "--backbone", "resnet", "--profile", "smoke"],
+         "network.backbone"),
         (["heatmap", "no/such/run", "--out", "x.png"], "run_dir"),
         (["curves", "no/such/run", "--out", "x.png"], "run_dir"),
+        # a run folder's commands read the run's own configuration: no profile, no overrides
+        (["heatmap", "no/such/run", "--out", "x.png", "--profile", "smoke"], "heatmap"),
+        (["curves", "no/such/run", "--out", "x.png", "--set", "seed=1"], "curves"),
     ],
 )
 def test_bad_training_input_is_one_line_exit_2(args: list[str], field: str) -> None:
-    result = vgs(*args, "--profile", "smoke")
+    result = vgs(*args)
     assert result.returncode == 2
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and field in lines[0] and "Traceback" not in result.stderr

@@ -1,10 +1,15 @@
 """The ``vgs`` command: ``demo``, ``sweep``, ``export-scene``, ``export-policy``,
 ``model-info``, ``train``, ``heatmap``, ``curves``, ``evaluate``, ``reproduce``, ``report``,
-``seeds`` and ``status``.
+``seeds``, ``status`` and ``config``.
 
-Every command but ``status``, ``seeds`` and ``export-policy`` takes ``--profile`` and
-configuration overrides (``--peg-mass`` ... and the generic ``--set key=value`` with a dotted
-path into :class:`vgs.config.ExperimentConfig`). Bad input,
+Each command takes only the flags it uses. Those that build a configuration from a profile
+(``demo``, ``sweep``, ``export-scene``, ``train``, ``evaluate``, ``reproduce`` and ``config``)
+take ``--profile``, the cell's override flags (``--peg-mass`` ...) and the generic ``--set
+key=value`` with a dotted path into :class:`vgs.config.ExperimentConfig`; ``model-info`` takes
+``--profile`` and ``--set`` of ``network.*`` keys only; the commands that read run folders
+(``heatmap``, ``curves``, ``report``, ``seeds``, ``status``, ``export-policy``) take none of
+them: a run's configuration is the one it recorded. ``vgs config`` lists every key with its
+value and documentation. Bad input,
 whether argparse rejects it or a :class:`vgs.errors.VGSError` is raised, ends with one line
 ``vgs: error: <field>: <message>`` on stderr and exit code 2; so do an OS error on a file or
 folder (an ``--out`` that is a file, a full disk) and a corrupt file of a run folder. Ctrl-C
@@ -19,10 +24,11 @@ import json
 import os
 import sys
 from collections.abc import Sequence
+from dataclasses import is_dataclass
 from pathlib import Path
 from typing import Any, NoReturn
 
-from vgs.config import ExperimentConfig, PegConfig, override, profile
+from vgs.config import NO_SUCH_FIELD, ExperimentConfig, PegConfig, override, profile
 from vgs.errors import ConfigError, VGSError
 from vgs.jsonsafe import json_safe
 from vgs.validate import check_config
@@ -73,12 +79,16 @@ def apply_override(cfg: ExperimentConfig, path: str, value: Any) -> ExperimentCo
     A tuple field given text that is not a Python literal takes its comma-separated items, so
     ``reproduce.conditions=nominal,mass`` and ``reproduce.conditions=(nominal,)`` both work.
     """
+    if is_dataclass(_current(cfg, path)):  # a section such as cell.peg: only its keys are set
+        raise ConfigError(path, "is a group of keys, not one key (vgs config lists them)")
     if isinstance(value, str) and isinstance(_current(cfg, path), tuple):
         items = value.strip().strip("()[]").split(",")
         value = tuple(parse_value(item.strip()) for item in items if item.strip())
     try:
         return override(cfg, path, value)
-    except ConfigError:
+    except ConfigError as exc:
+        if exc.message == NO_SUCH_FIELD:
+            raise ConfigError(exc.field, f"{NO_SUCH_FIELD} (vgs config lists them)") from None
         raise
     except (TypeError, ValueError) as exc:
         raise ConfigError(path, f"invalid value {value!r} ({exc})") from exc
@@ -106,19 +116,28 @@ def check_hole_fits(cfg: ExperimentConfig) -> None:
 
 
 def config_from_args(args: argparse.Namespace) -> ExperimentConfig:
-    """The profile with the override flags and ``--set`` pairs applied, checked."""
+    """The profile with the override flags and ``--set`` pairs applied, checked.
+
+    A command that reads only some sections of the configuration (``args.config_sections``,
+    e.g. ``model-info``: ``network``) refuses ``--set`` keys outside them.
+    """
     cfg = profile(args.profile)
     # The hole is made for the nominal peg: --peg-diameter changes the peg, not the hole.
     cfg = apply_override(cfg, "cell.hole.peg_diameter", PegConfig().diameter)
     for flag, path in OVERRIDE_FLAGS.items():
-        value = getattr(args, flag)
+        value = getattr(args, flag, None)  # commands without the cell flags have none
         if value is not None:
             cfg = apply_override(cfg, path, value)
+    sections = getattr(args, "config_sections", None)
     for pair in args.set:
         key, sep, text = pair.partition("=")
-        if not sep or not key.strip():
+        key = key.strip()
+        if not sep or not key:
             raise ConfigError("set", f"expected key=value, got {pair!r}")
-        cfg = apply_override(cfg, key.strip(), parse_value(text.strip()))
+        if sections and key.split(".")[0] not in sections:
+            raise ConfigError("set", f"vgs {args.command} uses only the keys "
+                                     f"{', '.join(f'{name}.*' for name in sections)}, not {key}")
+        cfg = apply_override(cfg, key, parse_value(text.strip()))
     cfg = check_config(cfg)  # types (True is not a mass) and seeds
     check_hole_fits(cfg)
     return cfg
@@ -422,34 +441,53 @@ def cmd_status(args: argparse.Namespace, cfg: ExperimentConfig | None) -> int:
     return 0
 
 
+def cmd_config(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
+    """Print every settable key of the resolved configuration with its value and its doc."""
+    from vgs.configdoc import format_settings, settings
+
+    items = settings(cfg)
+    if args.json:
+        print(json.dumps([{"key": s.key, "value": json_safe(s.value), "doc": s.doc}
+                          for s in items], indent=2))
+        return 0
+    print(f"# profile {args.profile}, resolved; each key takes --set KEY=VALUE (a Python "
+          "literal or text)")
+    print(format_settings(items))
+    return 0
+
+
 # -- parser -------------------------------------------------------------------------------------
 
 
-def _common() -> argparse.ArgumentParser:
-    common = _Parser(add_help=False)
-    common.add_argument("--profile", default="paper",
-                        help="configuration profile: smoke, quick, medium or paper "
-                             "(default: paper; the cell is the same in all profiles)")
-    group = common.add_argument_group("configuration overrides (SI units)")
-    group.add_argument("--peg-mass", type=float, help="peg mass [kg] (cell.peg.mass)")
-    group.add_argument("--peg-length", type=float, help="peg length [m] (cell.peg.length)")
-    group.add_argument("--peg-diameter", type=float,
-                       help="peg diameter [m] (cell.peg.diameter); the hole stays made for the "
-                            "nominal 30 mm peg")
-    group.add_argument("--clearance", type=float,
-                       help="diametral clearance [m] (cell.hole.clearance)")
-    group.add_argument("--hole-depth", type=float, help="hole depth [m] (cell.hole.depth)")
-    group.add_argument("--gripper-force", type=float,
-                       help="RG2 gripping force, 3-40 N (cell.gripper.force)")
+def _config_flags(p: argparse.ArgumentParser, sections: tuple[str, ...] = ()) -> None:
+    """Give a command that builds its configuration from a profile ``--profile`` and ``--set``;
+    with ``sections`` (the command reads only those) ``--set`` takes only their keys, without
+    them the command also takes the cell's override flags (``--peg-mass`` ...)."""
+    p.add_argument("--profile", default="paper",
+                   help="configuration profile: smoke, quick, medium or paper "
+                        "(default: paper; the cell is the same in all profiles)")
+    group = p.add_argument_group("configuration overrides (SI units; vgs config lists every key)")
+    if not sections:
+        group.add_argument("--peg-mass", type=float, help="peg mass [kg] (cell.peg.mass)")
+        group.add_argument("--peg-length", type=float, help="peg length [m] (cell.peg.length)")
+        group.add_argument("--peg-diameter", type=float,
+                           help="peg diameter [m] (cell.peg.diameter); the hole stays made for "
+                                "the nominal 30 mm peg")
+        group.add_argument("--clearance", type=float,
+                           help="diametral clearance [m] (cell.hole.clearance)")
+        group.add_argument("--hole-depth", type=float, help="hole depth [m] (cell.hole.depth)")
+        group.add_argument("--gripper-force", type=float,
+                           help="RG2 gripping force, 3-40 N (cell.gripper.force)")
+    which = (" or ".join(f"{name}.*" for name in sections) + " field") if sections else "field"
+    example = "network.num_rotations=8" if sections == ("network",) else "assembly.press_force=12"
     group.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                       help="any field by dotted path, e.g. --set assembly.press_force=12 "
-                            "(repeatable; the value is a Python literal or a string)")
-    return common
+                       help=f"any {which} by dotted path, e.g. --set {example} (repeatable; "
+                            "the value is a Python literal or a string)")
+    p.set_defaults(config_sections=sections)
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``vgs`` argument parser with its subcommands."""
-    common = _common()
     parser = _Parser(prog="vgs", description="Visual grasping strategy for peg-in-hole "
                                              "assembly (UR5 + RG2 in MuJoCo).")
     from vgs import __version__
@@ -457,7 +495,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"vgs {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    demo = sub.add_parser("demo", parents=[common], help="one whole episode with a figure")
+    demo = sub.add_parser("demo", help="one whole episode with a figure")
+    _config_flags(demo)
     demo.add_argument("--seed", type=seed_arg, help="episode seed (default: the profile's seed)")
     demo.add_argument("--json", action="store_true",
                       help="print only the episode record as JSON on stdout")
@@ -478,8 +517,8 @@ def build_parser() -> argparse.ArgumentParser:
                       help="frame size in pixels (default: %(default)s)")
     demo.set_defaults(func=cmd_demo)
 
-    sweep = sub.add_parser("sweep", parents=[common],
-                           help="assembly time against the grasp offset")
+    sweep = sub.add_parser("sweep", help="assembly time against the grasp offset")
+    _config_flags(sweep)
     sweep.add_argument("--offsets", type=int, default=9,
                        help="number of offsets over +-(L/2 - 15 mm) (default: %(default)s)")
     sweep.add_argument("--offsets-mm", metavar="A,B,...",
@@ -498,8 +537,9 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--no-progress", action="store_true", help="no progress bar")
     sweep.set_defaults(func=cmd_sweep)
 
-    scene = sub.add_parser("export-scene", parents=[common],
+    scene = sub.add_parser("export-scene",
                            help="write the cell as MJCF, ready to open in MuJoCo's viewer")
+    _config_flags(scene)
     scene.add_argument("--out", default="scene.xml", help="MJCF file (default: %(default)s)")
     scene.add_argument("--seed", type=seed_arg, default=0,
                        help="reset seed of the written default state: peg pose, hole position "
@@ -514,8 +554,9 @@ def build_parser() -> argparse.ArgumentParser:
                             help="weights file (.pt); the description goes beside it (.json)")
     export_pol.set_defaults(func=cmd_export_policy)
 
-    info = sub.add_parser("model-info", parents=[common],
+    info = sub.add_parser("model-info",
                           help="parameter counts and tensor shapes of the grasp network")
+    _config_flags(info, sections=("network",))
     info.add_argument("--backbone", help="densenet121 or light (default: the profile's)")
     info.add_argument("--rotations", type=int, help="number of grasp rotations R")
     info.add_argument("--rotate", help="input or features (default: the profile's)")
@@ -523,8 +564,9 @@ def build_parser() -> argparse.ArgumentParser:
     info.add_argument("--json", action="store_true", help="print JSON")
     info.set_defaults(func=cmd_model_info)
 
-    train = sub.add_parser("train", parents=[common],
+    train = sub.add_parser("train",
                            help="train the grasp policy (vgs or baseline); resumes from --out")
+    _config_flags(train)
     train.add_argument("--mode", required=True, choices=("vgs", "baseline"),
                        help="vgs: grasp + assembly reward; baseline: grasp reward only")
     train.add_argument("--out", required=True, help="run folder (started again: resumes)")
@@ -535,14 +577,14 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--no-progress", action="store_true", help="no progress bar")
     train.set_defaults(func=cmd_train)
 
-    heat = sub.add_parser("heatmap", parents=[common],
-                          help="Q heat maps of a run, untrained beside trained (Fig. 7)")
+    heat = sub.add_parser("heatmap", help="Q heat maps of a run, untrained beside trained "
+                                          "(Fig. 7), with the run's own configuration")
     heat.add_argument("run_dir", help="a training run folder")
     heat.add_argument("--out", required=True, help="figure file (PNG)")
     heat.add_argument("--scenes", type=int, default=2, help="scenes, one per row")
     heat.set_defaults(func=cmd_heatmap)
 
-    curves = sub.add_parser("curves", parents=[common],
+    curves = sub.add_parser("curves",
                             help="learning curves of runs and where each policy grasps")
     curves.add_argument("runs", nargs="+", help="training run folders")
     curves.add_argument("--out", required=True, help="figure file (PNG)")
@@ -550,8 +592,9 @@ def build_parser() -> argparse.ArgumentParser:
     curves.add_argument("--json", action="store_true", help="print the summary as JSON")
     curves.set_defaults(func=cmd_curves)
 
-    evaluate = sub.add_parser("evaluate", parents=[common],
+    evaluate = sub.add_parser("evaluate",
                               help="test one policy on one condition (parallel, resumable)")
+    _config_flags(evaluate)
     evaluate.add_argument("--policy", required=True,
                           help="a training run folder, random, center, or module:function")
     evaluate.add_argument("--condition", default="nominal", choices=("nominal", "mass", "length"),
@@ -566,8 +609,9 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_argument("--json", action="store_true", help="print the summary as JSON")
     evaluate.set_defaults(func=cmd_evaluate)
 
-    repro = sub.add_parser("reproduce", parents=[common],
+    repro = sub.add_parser("reproduce",
                            help="the paper's experiments: train, evaluate, sweep, report")
+    _config_flags(repro)
     repro.add_argument("--out", required=True, help="output folder (started again: resumes)")
     repro.add_argument("--stages", default="train,evaluate,sweep,report",
                        help="comma-separated stages to run, in pipeline order whatever the "
@@ -575,7 +619,7 @@ def build_parser() -> argparse.ArgumentParser:
     _parallel_flags(repro)
     repro.set_defaults(func=cmd_reproduce)
 
-    report = sub.add_parser("report", parents=[common],
+    report = sub.add_parser("report",
                             help="write DIR/report.md and DIR/report.html from DIR's results")
     report.add_argument("dir", help="a reproduce folder (with eval/<policy>/<condition>/)")
     report.add_argument("--publish", metavar="DEST",
@@ -597,6 +641,13 @@ def build_parser() -> argparse.ArgumentParser:
                                            "folder has got (safe while it runs)")
     status.add_argument("dir", help="a reproduce, train or evaluate output folder")
     status.set_defaults(func=cmd_status)
+
+    config = sub.add_parser("config", help="the resolved configuration: every key --set takes, "
+                                           "its value and what it means")
+    _config_flags(config)
+    config.add_argument("--json", action="store_true",
+                        help="print a JSON list of {key, value, doc} with each doc whole")
+    config.set_defaults(func=cmd_config)
     return parser
 
 
@@ -618,7 +669,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     args = None
     try:
-        args = build_parser().parse_args(argv)
+        args, extra = build_parser().parse_known_args(argv)
+        if extra:  # a flag another command takes, or one no command does
+            raise UsageError(f"{args.command}: does not take {' '.join(extra)} (vgs "
+                             f"{args.command} --help lists what it takes)")
         cfg = config_from_args(args) if hasattr(args, "profile") else None
         return args.func(args, cfg)
     except VGSError as exc:

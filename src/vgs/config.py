@@ -87,6 +87,9 @@ class HoleConfig:
         randomize: Displace the hole every episode uniformly inside a disk whose area equals the
             hole's area (paper 3.2), i.e. within the hole radius of ``nominal_xy``.
         friction: Sliding friction coefficient of the hole surfaces.
+        peg_diameter: Diameter of the nominal peg the hole is made for [m]; the hole's diameter
+            is this plus the clearance. The command line starts it at the nominal 30 mm, so
+            ``--peg-diameter`` changes the peg and not the hole.
     """
 
     clearance: float = 0.001
@@ -96,7 +99,7 @@ class HoleConfig:
     nominal_xy: tuple[float, float] = (0.42, 0.22)
     randomize: bool = True
     friction: float = 0.4
-    peg_diameter: float = 0.030  # the nominal peg the hole is made for
+    peg_diameter: float = 0.030
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.clearance) and self.clearance > 0):
@@ -565,7 +568,14 @@ class TrainConfig:
 
 @dataclass(frozen=True)
 class EvalConfig:
-    """Evaluation: test assemblies per policy and condition (paper: 1000)."""
+    """Evaluation: the test episodes of one policy on one condition (paper 4.2).
+
+    Attributes:
+        episodes: Test episodes per policy and condition (paper: 1000).
+        mass_range: The ``mass`` condition's peg mass factor is uniform in 1 +- this.
+        length_range: The ``length`` condition's peg length factor is uniform in 1 +- this; the
+            mass follows the length.
+    """
 
     episodes: int = 1000
     mass_range: float = 0.15
@@ -616,7 +626,15 @@ class ReproduceConfig:
 
 @dataclass(frozen=True)
 class ExperimentConfig:
-    """Everything one experiment needs."""
+    """Everything one experiment needs.
+
+    Attributes:
+        name: Profile name, recorded in ``reproduce.json`` and a sweep's ``summary.json`` and
+            shown in a reproduction report's title.
+        seed: Root seed of a training run (network initialisation, exploration, episode scenes)
+            and the default seed of ``vgs demo`` and ``vgs sweep``; ``vgs reproduce`` trains
+            with each of ``reproduce.train_seeds`` instead.
+    """
 
     name: str = "paper"
     seed: int = 0

@@ -125,8 +125,7 @@ def test_a_crafted_checkpoint_is_refused_by_every_command_and_runs_nothing(
         "train": ["train", "--mode", "vgs", "--out", str(run), *flags],
         "evaluate": ["evaluate", "--policy", str(run), "--workers", "1", "--episodes", "2",
                      "--out", str(tmp_path / "eval"), *flags],
-        "heatmap": ["heatmap", str(run), "--out", str(tmp_path / "heat.png"),
-                    *fakes.CONFIG_FLAGS],
+        "heatmap": ["heatmap", str(run), "--out", str(tmp_path / "heat.png")],
         "status": ["status", str(run)],
     }
     repro = tmp_path / "repro"
