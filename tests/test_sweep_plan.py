@@ -10,12 +10,12 @@ import pytest
 
 from vgs.config import PegConfig, profile
 from vgs.errors import ConfigError, VGSError
+from vgs.experiments.plots import disturbing_moments
 from vgs.experiments.sweep import (
     COLUMNS,
     SweepSpec,
     check_spec,
     default_offsets,
-    disturbing_moments,
     paired_analysis,
     plan,
     read_journal,

@@ -64,6 +64,7 @@ from vgs.config import ExperimentConfig, PegConfig, to_dict
 from vgs.errors import ConfigError, CorruptFileError, RunMismatchError, VGSError
 from vgs.experiments.journal import encode_row, read_journal
 from vgs.experiments.policies import EvalPolicy, is_run_dir, load_policy, policy_label
+from vgs.experiments.stats import sample_std
 from vgs.runfolder import check_request, host, locked, read_json, write_json
 from vgs.validate import check_config, check_seed
 
@@ -361,7 +362,7 @@ def summarize(df: pd.DataFrame) -> dict[str, Any]:
         "episodes": int(len(df)), "grasp_success_rate": float(df["grasp_success"].mean()),
         "success_rate": float(len(ok) / max(len(df), 1)), "successes": int(len(ok)),
         "time_total_h": float(times.sum() / 3600.0), "time_mean_s": stat(np.mean),
-        "time_std_s": stat(lambda t: np.std(t, ddof=1) if t.size > 1 else 0.0),
+        "time_std_s": stat(lambda t: sample_std(t) if t.size > 1 else 0.0),
         "time_min_s": stat(np.min), "time_max_s": stat(np.max),
         "time_median_s": stat(np.median),
         # Throughput: every assembly attempt's simulated time (a failed one until it was given

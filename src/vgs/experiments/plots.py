@@ -1,4 +1,5 @@
-"""Figures of the demo episode and of the grasp-offset sweep (matplotlib, headless)."""
+"""Figures of the demo episode and of the grasp-offset sweep (matplotlib, headless), and the
+disturbing moments of paper eq. 2 and 3 that the sweep figure draws beside its times."""
 
 from __future__ import annotations
 
@@ -18,8 +19,9 @@ from matplotlib.patches import Circle  # noqa: E402
 
 from vgs.assembly.record import PHASES  # noqa: E402
 from vgs.config import ExperimentConfig  # noqa: E402
+from vgs.control.arm import GRAVITY  # noqa: E402
 from vgs.experiments.demo import DemoResult  # noqa: E402
-from vgs.experiments.sweep import disturbing_moments, summarize  # noqa: E402
+from vgs.experiments.stats import population_std  # noqa: E402
 from vgs.sim.camera import Heightmap  # noqa: E402
 from vgs.sim.rg2 import PAD_HALF  # noqa: E402
 
@@ -173,12 +175,13 @@ def _tip_path(ax: Axes, result: DemoResult) -> None:
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
 
 
-def sweep_figure(rows: Sequence[dict[str, Any]], cfg: ExperimentConfig, path: str | Path,
-                 title: str = "") -> Path:
+def sweep_figure(rows: Sequence[dict[str, Any]], summary: Sequence[dict[str, Any]],
+                 cfg: ExperimentConfig, path: str | Path, title: str = "") -> Path:
     """Assembly time and success against the grasp offset, with M_G and M_I (eq. 2, 3).
 
     Args:
         rows: Sweep rows (see :data:`vgs.experiments.sweep.COLUMNS`).
+        summary: Their per-offset summary (:func:`vgs.experiments.sweep.summarize`).
         cfg: The sweep's configuration (nominal peg mass, search tilt, wiggle).
         path: Output image file.
         title: Figure title.
@@ -186,7 +189,6 @@ def sweep_figure(rows: Sequence[dict[str, Any]], cfg: ExperimentConfig, path: st
     Returns:
         The written path.
     """
-    summary = summarize(rows)
     offsets = np.array([s["offset_mm"] for s in summary])
     fig, (ax, ax_a, ax_s) = plt.subplots(3, 1, figsize=(8, 10), sharex=True,
                                          height_ratios=[2, 1.2, 1], layout="constrained")
@@ -225,7 +227,7 @@ def _phase_stats(group: Sequence[dict[str, Any]], phases: Sequence[str]) -> tupl
     if not group:
         return math.nan, math.nan
     values = np.array([sum(r[f"time_{p}_s"] for p in phases) for r in group])
-    return float(values.mean()), float(values.std())
+    return float(values.mean()), population_std(values)
 
 
 def _mean_std(ax: Axes, summary: Sequence[dict[str, Any]], key: str, color: str,
@@ -257,3 +259,29 @@ def _moment_axis(ax: Axes, cfg: ExperimentConfig, offsets: np.ndarray) -> None:
     lines = ax.get_legend_handles_labels()
     moments = twin.get_legend_handles_labels()
     ax.legend(lines[0] + moments[0], lines[1] + moments[1], fontsize=7, loc="upper center")
+
+
+def disturbing_moments(cfg: ExperimentConfig, lever: np.ndarray,
+                       mass: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Paper eq. 2 and 3 for the grasp lever arms ``lever`` [m].
+
+    ``M_G = m g |l| sin(beta)`` with beta the search tilt ``assembly.search_tilt_deg`` (the
+    angle between gravity and the peg axis that the controller holds), and
+    ``M_I = (1/2) m r^2 d2beta/dt2`` with ``r = |l|`` and the peak angular acceleration of a
+    sinusoidal wiggle of amplitude A and period T: ``(2 pi / T)^2 A``.
+
+    Args:
+        cfg: Experiment configuration (assembly settings, nominal peg mass).
+        lever: Distances from the pads to the centre of mass [m].
+        mass: Peg mass [kg]; default the configured one.
+
+    Returns:
+        ``(M_G, M_I)`` in N m.
+    """
+    m = cfg.cell.peg.mass if mass is None else mass
+    a = cfg.assembly
+    lever = np.abs(np.asarray(lever, dtype=float))
+    m_g = m * GRAVITY * lever * math.sin(math.radians(a.search_tilt_deg))
+    accel = (2.0 * math.pi / a.wiggle_period) ** 2 * math.radians(a.wiggle_amplitude_deg)
+    m_i = 0.5 * m * lever**2 * accel
+    return m_g, m_i

@@ -47,6 +47,7 @@ from vgs.experiments.report import (  # noqa: E402
     load_results,
     time_arrays,
 )
+from vgs.experiments.stats import sample_std  # noqa: E402
 
 
 def load_seeds(folders: list[Path]) -> pd.DataFrame:
@@ -172,8 +173,7 @@ def seeds_table(df: pd.DataFrame) -> pd.DataFrame:
                 mean_row[key] = (int(sum(values)) if key.startswith("successes")
                                  else float(np.mean(values)) if values else None)
         mean_row.update(gain_pct=value, gain_ci_low=low, gain_ci_high=high,
-                        gain_sd_between_seeds=float(np.std(gains, ddof=1))
-                        if gains.size > 1 else math.nan,
+                        gain_sd_between_seeds=sample_std(gains),
                         seeds_with_positive_gain=int(np.sum(gains > 0)), seeds=len(mine_rows))
         rows.append(mean_row)
     if not rows:

@@ -33,11 +33,11 @@ from vgs.assembly.episode import EpisodeRunner, offset_policy
 from vgs.assembly.record import PHASES
 from vgs.config import CellConfig, ExperimentConfig, PegConfig
 from vgs.errors import ConfigError, VGSError
+from vgs.experiments.stats import population_std
 from vgs.jsonsafe import json_safe
 from vgs.runfolder import host, hosts_of
 from vgs.sim.rg2 import PAD_HALF
 
-GRAVITY = 9.81
 # The sweep keeps the pad's near edge this far inside the peg's end (pads are 22 mm long).
 END_MARGIN = 0.015
 
@@ -315,9 +315,9 @@ def sweep_to_folder(cfg: ExperimentConfig, spec: SweepSpec, out: Path,
     write_csv(rows, out / "sweep.csv")
     ranges = (f"mass +-{100 * spec.mass_range:g} %, length +-{100 * spec.length_range:g} %"
               if spec.mass_range or spec.length_range else "nominal peg")
-    sweep_figure(rows, cfg, out / "sweep.png",
-                 title=f"{len(rows)} episodes, {spec.trials} per offset, {ranges}")
     summary = summarize(rows)
+    sweep_figure(rows, summary, cfg, out / "sweep.png",
+                 title=f"{len(rows)} episodes, {spec.trials} per offset, {ranges}")
     doc = {"profile": cfg.name, "seed": spec.seed, "trials": spec.trials,
            "mass_range": spec.mass_range, "length_range": spec.length_range,
            "offsets": summary, "paired": paired_analysis(rows), "hosts": hosts_of(rows)}
@@ -341,7 +341,7 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
             "successes": int(times.size),
             "success_rate": times.size / len(group),
             "time_mean_s": _stat(times, np.mean),
-            "time_std_s": _stat(times, np.std),
+            "time_std_s": _stat(times, population_std),
             "time_min_s": _stat(times, np.min),
             "time_max_s": _stat(times, np.max),
             "adjustments_mean": float(np.mean([r["adjustments"] for r in group])),
@@ -458,29 +458,3 @@ def wilson_interval(k: int, n: int, z: float = 1.96) -> tuple[float, float]:
     centre = (p + z * z / (2 * n)) / denom
     half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
     return max(0.0, centre - half), min(1.0, centre + half)
-
-
-def disturbing_moments(cfg: ExperimentConfig, lever: np.ndarray,
-                       mass: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Paper eq. 2 and 3 for the grasp lever arms ``lever`` [m].
-
-    ``M_G = m g |l| sin(beta)`` with beta the search tilt ``assembly.search_tilt_deg`` (the
-    angle between gravity and the peg axis that the controller holds), and
-    ``M_I = (1/2) m r^2 d2beta/dt2`` with ``r = |l|`` and the peak angular acceleration of a
-    sinusoidal wiggle of amplitude A and period T: ``(2 pi / T)^2 A``.
-
-    Args:
-        cfg: Experiment configuration (assembly settings, nominal peg mass).
-        lever: Distances from the pads to the centre of mass [m].
-        mass: Peg mass [kg]; default the configured one.
-
-    Returns:
-        ``(M_G, M_I)`` in N m.
-    """
-    m = cfg.cell.peg.mass if mass is None else mass
-    a = cfg.assembly
-    lever = np.abs(np.asarray(lever, dtype=float))
-    m_g = m * GRAVITY * lever * math.sin(math.radians(a.search_tilt_deg))
-    accel = (2.0 * math.pi / a.wiggle_period) ** 2 * math.radians(a.wiggle_amplitude_deg)
-    m_i = 0.5 * m * lever**2 * accel
-    return m_g, m_i
