@@ -278,3 +278,41 @@ def test_legacy_journal_still_reads(tmp_path: Path) -> None:
         strict_loads(line)
     rows2, _ = read_journal(again, plan)
     assert json.dumps(rows2, sort_keys=True) == json.dumps(rows, sort_keys=True)
+
+
+def test_an_evaluation_started_before_the_vocabulary_resumes(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A journal of legacy rows (old names and units, bare NaN, the old checksum) resumed by
+    this vgs gives the table an uninterrupted run writes (physics-free stand-in)."""
+    from experiments import fakes
+    from vgs.experiments import evaluate as evaluate_mod
+
+    monkeypatch.setattr(evaluate_mod, "EpisodeRunner", fakes.FakeRunner)
+    cfg = fakes.tiny_config()
+    spec = EvalSpec("random", "length", 4, seed=2)
+    reference = evaluate_mod.evaluate(cfg, spec, tmp_path / "ref", workers=1, progress=False)
+    rows, _ = read_journal(tmp_path / "ref" / "journal.jsonl")
+    old = {new: legacy for legacy, (new, _) in LEGACY.items()
+           if legacy not in ("mass_kg", "length_mm")}
+    lines = []
+    for i in (0, 1):  # the first two episodes, as the evaluation before the change wrote them
+        row = {}
+        for key, value in rows[i].items():
+            if key == "grasp_offset_mm":
+                row["grasp_offset"] = value / 1000.0
+                row[key] = value
+            elif key == "peg_length_mm":
+                row["peg_length"] = value / 1000.0
+            else:
+                row[old.get(key, key)] = value
+        body = json.dumps(row)
+        lines.append(f"{body[:-1]}, \"crc32\": {zlib.crc32(body.encode())}}}\n")
+    text = "".join(lines)
+    assert "NaN" in text and '"peg_length": 0.' in text and '"success": ' in text
+    (tmp_path / "old").mkdir()
+    (tmp_path / "old" / "journal.jsonl").write_text(text)
+    resumed = evaluate_mod.evaluate(cfg, spec, tmp_path / "old", workers=1, progress=False)
+    assert list(resumed.columns) == list(reference.columns)
+    pd.testing.assert_frame_equal(resumed.drop(columns="wall_s"),
+                                  reference.drop(columns="wall_s"), rtol=1e-12)
+    assert not set(pq.read_schema(tmp_path / "old" / "episodes.parquet").names) & set(LEGACY)
