@@ -9,6 +9,7 @@ import shutil
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import mujoco
 import pytest
@@ -30,8 +31,9 @@ def test_demo_json(tmp_path: Path) -> None:
     assert proc.returncode == 0, proc.stderr
     lines = proc.stdout.strip().splitlines()
     assert len(lines) == 1
-    row = json.loads(lines[0])
+    row = json.loads(lines[0], parse_constant=lambda c: pytest.fail(f"bare {c}: not strict"))
     assert row["seed"] == 2 and "time_search_s" in row and "grasp_offset_mm" in row
+    assert "assembly_time_s" in row and "peg_length_mm" in row
     assert (out / "demo.png").stat().st_size > 10_000
 
 
@@ -168,15 +170,11 @@ def test_seeds(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
-def test_reproduce_quick_at_reduced_size(tmp_path: Path) -> None:
-    """The README's main job (``vgs reproduce --profile quick``), shrunk to seconds."""
-    out = tmp_path / "repro"
-    args = ("reproduce", "--profile", "quick", "--out", str(out), "--workers", "2",
-            "--no-progress", "--set", "train.episodes=2", "--set", "agent.random_episodes=1",
-            "--set", "train.checkpoint_every=1", "--set", "eval.episodes=1",
-            "--set", "reproduce.conditions=('nominal', 'mass')",
-            "--set", "reproduce.sweep_offsets=1", "--set", "reproduce.sweep_trials=1")
-    proc = vgs(*args, cwd=tmp_path)
+def test_reproduce_quick_at_reduced_size(tmp_path: Path, quick_reproduction: Any) -> None:
+    """The README's main job (``vgs reproduce --profile quick``), shrunk to seconds (run once
+    per session by the ``quick_reproduction`` fixture of conftest.py)."""
+    out, args, proc = (quick_reproduction.out, quick_reproduction.args,
+                       quick_reproduction.proc)
     assert proc.returncode == 0, proc.stderr
     for mode in ("baseline", "vgs"):
         assert (out / "train" / f"{mode}_s0" / "checkpoint.pt").exists()

@@ -124,7 +124,8 @@ def test_step_returns_record_and_reward() -> None:
     _, reward, terminated, truncated, info = env.step((0, int(rows.mean()), int(cols.mean())))
     record = info["record"]
     assert terminated and not truncated
-    expected = (0.3 if record["grasp_success"] else 0.0) + (0.7 if record["success"] else 0.0)
+    expected = ((0.3 if record["grasp_success"] else 0.0)
+                + (0.7 if record["assembly_success"] else 0.0))
     assert reward == pytest.approx(expected)
     assert all(not (isinstance(v, float) and math.isnan(v)) for v in record.values())
 

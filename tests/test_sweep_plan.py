@@ -90,7 +90,8 @@ def test_disturbing_moments_follow_eq_2_and_3() -> None:
 
 def _row(offset: float, trial: int, ok: bool, time: float, align: float = 1.0,
          retries: int = 0) -> dict[str, object]:
-    return {"offset_mm": offset, "trial": trial, "success": ok, "assembly_time_s": time,
+    return {"offset_mm": offset, "trial": trial, "assembly_success": ok,
+            "assembly_time_s": time,
             "time_align_s": align, "adjustments": 2, "retries": retries,
             "failure_reason": "" if ok else "timeout:align"}
 
@@ -133,12 +134,20 @@ def test_sweep_journal_resumes_and_refuses_another_sweep(tmp_path) -> None:
     spec = SweepSpec(offsets=(0.0, 0.01), trials=2, seed=1)
     trials = plan(spec, PegConfig())
     journal = tmp_path / "journal.jsonl"
-    row = {"index": 1, "offset_mm": 0.0, "mass_kg": trials[1].peg.mass,
-           "length_mm": trials[1].peg.length * 1000, "seed": trials[1].seed,
-           "assembly_time_s": None, "success": False}
+    row = {"index": 1, "offset_mm": 0.0, "peg_mass_kg": trials[1].peg.mass,
+           "peg_length_mm": trials[1].peg.length * 1000, "seed": trials[1].seed,
+           "assembly_time_s": None, "assembly_success": False}
     journal.write_text(json.dumps(row) + "\n" + '{"index": 2, "off')  # torn last line
     rows = read_journal(journal, trials)
     assert list(rows) == [1] and math.isnan(rows[1]["assembly_time_s"])
+    # a row written before the column vocabulary (mass_kg, length_mm, success, bare NaN)
+    legacy = {"index": 1, "offset_mm": 0.0, "mass_kg": trials[1].peg.mass,
+              "length_mm": trials[1].peg.length * 1000, "seed": trials[1].seed,
+              "assembly_time_s": math.nan, "success": True}
+    journal.write_text(json.dumps(legacy) + "\n")
+    rows = read_journal(journal, trials)
+    assert rows[1]["assembly_success"] is True and rows[1]["peg_mass_kg"] == trials[1].peg.mass
+    assert math.isnan(rows[1]["assembly_time_s"]) and "success" not in rows[1]
     journal.write_text(json.dumps({**row, "seed": 7}) + "\n")
     with pytest.raises(VGSError, match="another sweep"):
         read_journal(journal, trials)

@@ -27,6 +27,9 @@ from vgs.validate import check_config, check_seed
     ("cell.hole.nominal_xy", (0.4,), "cell.hole.nominal_xy"),
     ("reproduce.train_seeds", (0, -2), "reproduce.train_seeds[1]"),
     ("reproduce.eval_seed", True, "reproduce.eval_seed"),
+    ("agent.weight_decay", float("inf"), "agent.weight_decay"),  # (strict JSON has no inf)
+    ("network.depth_mean", float("nan"), "network.depth_mean"),
+    ("reward.threshold_s", float("inf"), "reward.threshold_s"),
 ])
 def test_wrong_types_and_seeds_are_named(path: str, value, field: str) -> None:
     from vgs.cli import apply_override

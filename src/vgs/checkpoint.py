@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from vgs.errors import CheckpointError
+from vgs.jsonsafe import dumps
 
 FORMAT = "vgs-checkpoint/2"
 META = "meta.json"
@@ -62,7 +63,7 @@ def save(path: Path, tensors: dict[str, Any], meta: dict[str, Any]) -> None:
     torch.save(tensors, buffer)
     archive = io.BytesIO()
     with zipfile.ZipFile(archive, "w", compression=zipfile.ZIP_STORED) as zf:
-        zf.writestr(META, json.dumps({"format": FORMAT, **meta}, indent=1))
+        zf.writestr(META, dumps({"format": FORMAT, **meta}, indent=1))
         zf.writestr(TENSORS, buffer.getvalue())
     atomic_write_bytes(path, archive.getvalue())
 

@@ -30,7 +30,7 @@ from typing import Any, NoReturn
 
 from vgs.config import NO_SUCH_FIELD, ExperimentConfig, PegConfig, override, profile
 from vgs.errors import ConfigError, VGSError
-from vgs.jsonsafe import json_safe
+from vgs.jsonsafe import dumps
 from vgs.validate import check_config
 
 # Flag -> dotted configuration path. Values are SI (m, kg, N).
@@ -195,7 +195,7 @@ def cmd_demo(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
         video = demo_video(result, cfg.cell, args.video, fps=args.video_fps,
                            speed=args.video_speed, width=video_size[0], height=video_size[1])
     if args.json:
-        print(json.dumps(json_safe(result.record.to_row())))
+        print(dumps(result.record.to_row()))
     else:
         print(format_report(result.record))
         print(f"\nfigure          {figure}")
@@ -318,7 +318,7 @@ def cmd_model_info(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
                                      "rotations": "network.num_rotations",
                                      "rotate": "network.rotate"})
     info = model_info(cfg.network, rotate=cfg.network.rotate, size=args.size)
-    print(json.dumps(info, indent=2) if args.json else format_model_info(info))
+    print(dumps(info, indent=2) if args.json else format_model_info(info))
     return 0
 
 
@@ -349,7 +349,7 @@ def cmd_curves(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
 
     summaries = plot_curves([Path(r) for r in args.runs], Path(args.out), window=args.window)
     if args.json:
-        print(json.dumps(json_safe(summaries), indent=2))
+        print(dumps(summaries, indent=2))
         return 0
     print(f"{'run':<28} {'phase':<12} {'n':>4} {'grasp':>6} {'assembly':>8} {'T [s]':>7} "
           f"{'|l| [mm]':>8} {'reward':>6}")
@@ -373,7 +373,7 @@ def cmd_evaluate(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
                   ray_address=args.ray_address, progress=not args.no_progress)
     s = summarize(df)
     if args.json:
-        print(json.dumps(json_safe(s), indent=2))
+        print(dumps(s, indent=2))
         return 0
     print(f"{df['policy'].iloc[0]} / {args.condition}: {s['episodes']} episodes, success "
           f"{s['success_rate']:.1%}, grasp {s['grasp_success_rate']:.1%}")
@@ -447,8 +447,8 @@ def cmd_config(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
 
     items = settings(cfg)
     if args.json:
-        print(json.dumps([{"key": s.key, "value": json_safe(s.value), "doc": s.doc}
-                          for s in items], indent=2))
+        print(dumps([{"key": s.key, "value": s.value, "doc": s.doc} for s in items],
+                    indent=2))
         return 0
     print(f"# profile {args.profile}, resolved; each key takes --set KEY=VALUE (a Python "
           "literal or text)")

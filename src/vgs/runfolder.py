@@ -20,6 +20,7 @@ from typing import Any
 
 from vgs.checkpoint import atomic_write_text
 from vgs.errors import CorruptFileError, FolderBusyError, RunMismatchError
+from vgs.jsonsafe import dumps
 
 LOCK_NAME = ".lock"
 
@@ -73,8 +74,9 @@ def read_json(path: Path, kind: type = dict) -> Any:
 
 
 def write_json(path: Path, data: Any) -> None:
-    """Write ``data`` as JSON to ``path`` atomically (temporary file, then ``os.replace``)."""
-    atomic_write_text(path, json.dumps(data, indent=2))
+    """Write ``data`` as strict JSON (NaN and infinities as ``null``,
+    :func:`vgs.jsonsafe.dumps`) to ``path`` atomically (temporary file, then ``os.replace``)."""
+    atomic_write_text(path, dumps(data, indent=2))
 
 
 def check_request(saved: dict[str, Any], cfg: Any, where: Path,
@@ -182,17 +184,22 @@ def _missing(value: Any) -> bool:
 
 
 def read_table(path: Path) -> Any:
-    """A results table (``.parquet`` or ``.csv``) as a pandas DataFrame.
+    """A results table (``.parquet`` or ``.csv``) as a pandas DataFrame, in the column
+    vocabulary of :mod:`vgs.columns`: tables written before it (``docs/results``) have their
+    legacy columns renamed and converted, and booleans written as 0/1 made booleans
+    (:func:`vgs.columns.normalize`).
 
     Raises:
         CorruptFileError: If the file cannot be parsed (truncated, not a table, not UTF-8).
     """
     import pandas as pd
 
+    from vgs.columns import normalize
+
     try:
         if path.suffix == ".parquet":
-            return pd.read_parquet(path)
-        return pd.read_csv(path)
+            return normalize(pd.read_parquet(path))
+        return normalize(pd.read_csv(path))
     except OSError:
         raise
     except Exception as exc:  # noqa: BLE001 - pandas and pyarrow raise many kinds

@@ -74,6 +74,8 @@ def _coerce(field: str, value: Any, tp: Any) -> Any:
             raise ConfigError(field, f"expected a number, got {value!r}")
         if isinstance(value, int) and not math.isfinite(float(value)):
             raise ConfigError(field, f"number out of range: {value!r}")
+        if not math.isfinite(value):  # run folders record the configuration as strict JSON
+            raise ConfigError(field, f"must be a finite number, got {value!r}")
         return float(value)
     if tp is int:
         if isinstance(value, bool) or not isinstance(value, int):

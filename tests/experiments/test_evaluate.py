@@ -110,7 +110,7 @@ def test_an_episode_that_raises_becomes_a_failure_row(cfg, tmp_path) -> None:
     df = evaluate(cfg, EvalSpec(f"{POLICIES}:raising", "nominal", 2, seed=1), tmp_path,
                   workers=2, progress=False)
     assert len(df) == 2
-    assert not df["success"].any()
+    assert not df["assembly_success"].any()
     assert all(r.startswith("error:RuntimeError: policy exploded") for r in df["failure_reason"])
 
 

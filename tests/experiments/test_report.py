@@ -22,9 +22,10 @@ def _table(policy: str, times: np.ndarray, condition: str = "nominal",
     ok = np.ones(n, bool) if success is None else success
     return pd.DataFrame({
         "index": np.arange(n), "policy": policy, "condition": condition, "root_seed": 0,
-        "seed": np.arange(n) + 100, "peg_mass": 0.55, "peg_length": 0.1, "grasp_success": True,
-        "grasp_offset": 0.01, "success": ok, "failure_reason": np.where(ok, "", "timeout:align"),
-        "assembly_time": np.where(ok, times, np.nan), "adjustments": 3, "retries": 0,
+        "seed": np.arange(n) + 100, "peg_mass_kg": 0.55, "peg_length_mm": 100.0,
+        "grasp_success": True, "assembly_success": ok,
+        "failure_reason": np.where(ok, "", "timeout:align"),
+        "assembly_time_s": np.where(ok, times, np.nan), "adjustments": 3, "retries": 0,
         "grasp_offset_mm": 10.0 if policy == "vgs" else 30.0,
     })
 
@@ -59,12 +60,12 @@ def test_time_per_assembled_peg_counts_failed_attempts() -> None:
 
     df = _table("vgs", np.array([40.0, 60.0, 0.0, 0.0]),
                 success=np.array([True, True, False, False]))
-    df.loc[2, "assembly_time"] = 100.0  # an attempt given up after 100 s
+    df.loc[2, "assembly_time_s"] = 100.0  # an attempt given up after 100 s
     df.loc[3, "grasp_success"] = False  # a missed grasp: no assembly time
     s = summarize(df)
     assert s["time_mean_s"] == pytest.approx(50.0)  # successful assemblies only
     assert s["time_per_assembled_s"] == pytest.approx((40.0 + 60.0 + 100.0) / 2)
-    assert summarize(df.assign(success=False))["time_per_assembled_s"] is None
+    assert summarize(df.assign(assembly_success=False))["time_per_assembled_s"] is None
 
 
 def test_report_says_when_vgs_is_slower(tmp_path: Path) -> None:

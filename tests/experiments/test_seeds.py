@@ -16,9 +16,10 @@ def _table(policy: str, times: np.ndarray, run: str, root_seed: int = 7) -> pd.D
     n = times.size
     return pd.DataFrame({
         "index": np.arange(n), "policy": policy, "condition": "nominal", "root_seed": root_seed,
-        "seed": np.arange(n) + 100, "peg_mass": 0.55, "peg_length": 0.1, "grasp_success": True,
-        "grasp_offset": 0.01, "success": True, "failure_reason": "", "assembly_time": times,
-        "adjustments": 3, "retries": 0, "grasp_offset_mm": 10.0 if policy == "vgs" else 30.0,
+        "seed": np.arange(n) + 100, "peg_mass_kg": 0.55, "peg_length_mm": 100.0,
+        "grasp_success": True, "assembly_success": True, "failure_reason": "",
+        "assembly_time_s": times, "adjustments": 3, "retries": 0,
+        "grasp_offset_mm": 10.0 if policy == "vgs" else 30.0,
         "train_run": run,
     })
 

@@ -6,7 +6,9 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
-PHASES: tuple[str, ...] = ("transport", "approach", "search", "slide", "align", "insert")
+from vgs.columns import PHASE_NAMES, normalize_row
+
+PHASES: tuple[str, ...] = PHASE_NAMES
 
 
 @dataclass
@@ -60,9 +62,15 @@ class EpisodeRecord:
     peak_grasp_moment: float = math.nan
 
     def to_row(self) -> dict[str, object]:
-        """Flat dict (one table row): phase times become ``time_<phase>_s`` columns."""
-        row = {k: v for k, v in dataclasses.asdict(self).items() if k != "phase_times"}
-        for phase in PHASES:
-            row[f"time_{phase}_s"] = self.phase_times.get(phase, 0.0)
-        row["grasp_offset_mm"] = self.grasp_offset * 1000.0
+        """Flat dict (one table row) in the column vocabulary of :mod:`vgs.columns`: names with
+        their units (``peg_mass_kg``, ``peg_length_mm``, ``grasp_offset_mm``,
+        ``assembly_success``, ``assembly_time_s``, ``peak_..._nm``), phase times as
+        ``time_<phase>_s`` columns after the assembly time."""
+        fields = dataclasses.asdict(self)
+        times = fields.pop("phase_times")
+        row: dict[str, object] = {}
+        for key, value in normalize_row(fields).items():
+            row[key] = value
+            if key == "assembly_time_s":
+                row.update({f"time_{p}_s": times.get(p, 0.0) for p in PHASES})
         return row

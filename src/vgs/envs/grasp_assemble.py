@@ -31,7 +31,8 @@ times 1 +- ``eval.mass_range``; ``length``, its length times 1 +- ``eval.length_
 the mass following; one uniform draw per episode.
 
 Every step ends the episode (``terminated=True``); ``info["record"]`` is the episode record
-(``EpisodeRecord.to_row()``, ``None`` for undefined values). ``render_mode="rgb_array"``:
+(``EpisodeRecord.to_row()``: the column names and units of :mod:`vgs.columns`, ``None`` for
+undefined values). ``render_mode="rgb_array"``:
 :meth:`GraspAssembleEnv.render` draws the cell's current state (after ``reset``: the peg on the
 table; after ``step``: the end of the assembly) from the ``perspective`` camera; it needs
 OpenGL (``MUJOCO_GL=egl`` on headless machines) and runs only when called.

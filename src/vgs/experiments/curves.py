@@ -21,7 +21,8 @@ from vgs.errors import ConfigError  # noqa: E402
 
 
 def load_episodes(run_dir: Path) -> tuple[pd.DataFrame, dict]:
-    """The episode table and run metadata of a run.
+    """The episode table (column vocabulary of :mod:`vgs.columns`, booleans as booleans also
+    for tables written with 0/1) and run metadata of a run.
 
     Raises:
         ConfigError: If the folder holds no episodes.
@@ -37,8 +38,8 @@ def load_episodes(run_dir: Path) -> tuple[pd.DataFrame, dict]:
 def summarize(df: pd.DataFrame, random_episodes: int, window: int) -> dict[str, float]:
     """Grasp success, assembly success and time, |offset| in the random phase and at the end."""
     def stats(part: pd.DataFrame) -> dict[str, float]:
-        ok = part[part.assembly_success == 1]
-        held = part[part.grasp_success == 1]
+        ok = part[part.assembly_success]
+        held = part[part.grasp_success]
         return {
             "episodes": int(len(part)),
             "grasp_success": float(part.grasp_success.mean()) if len(part) else float("nan"),
@@ -73,10 +74,10 @@ def plot_curves(run_dirs: list[Path], out: Path, window: int = 20) -> dict[str, 
         summaries[label] = summarize(df, random_episodes, window)
         roll = df.rolling(window, min_periods=max(1, window // 2))
         ax_g.plot(df.episode, roll.grasp_success.mean(), label=label)
-        times = df.assembly_time_s.where(df.assembly_success == 1)
+        times = df.assembly_time_s.where(df.assembly_success)
         ax_t.plot(df.episode, times.rolling(window, min_periods=min(3, window)).mean(), label=label)
         ax_r.plot(df.episode, roll.reward.mean(), label=label)
-        held = df[df.grasp_success == 1]
+        held = df[df.grasp_success]
         offsets.append((label + ", random phase",
                         held[held.episode < random_episodes].grasp_offset_mm.abs()))
         offsets.append((label + f", last {window}",

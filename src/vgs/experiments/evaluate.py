@@ -60,6 +60,7 @@ from tqdm import tqdm
 
 from vgs.assembly.episode import EpisodeRunner
 from vgs.assembly.record import EpisodeRecord
+from vgs.columns import write_parquet
 from vgs.config import ExperimentConfig, PegConfig, to_dict
 from vgs.errors import ConfigError, CorruptFileError, RunMismatchError, VGSError
 from vgs.experiments.journal import encode_row, read_journal
@@ -226,7 +227,8 @@ def _run_in_process(task: EpisodeTask) -> dict[str, Any]:
 
 def _row(task: EpisodeTask, record: EpisodeRecord, decision: dict[str, Any],
          wall: float) -> dict[str, Any]:
-    """One table row: the task's place, the record, the policy's decision, the wall time."""
+    """One table row (column vocabulary of :mod:`vgs.columns`): the task's place, the record,
+    the policy's decision, the wall time, the host."""
     return {"job": task.job, "index": task.index, **record.to_row(),
             "rotation": decision.get("rotation", -1), "row": decision.get("row", -1),
             "col": decision.get("col", -1), "q_value": decision.get("q_value", math.nan),
@@ -352,8 +354,8 @@ def summarize(df: pd.DataFrame) -> dict[str, Any]:
     ``time_per_assembled_s`` is the simulated assembly time of all episodes, failed attempts
     included, divided by the number of pegs assembled.
     """
-    ok = df[df["success"].astype(bool)]
-    times = ok["assembly_time"].to_numpy(float)
+    ok = df[df["assembly_success"].astype(bool)]
+    times = ok["assembly_time_s"].to_numpy(float)
 
     def stat(fn: Callable[[np.ndarray], Any]) -> float | None:
         return float(fn(times)) if times.size else None
@@ -367,12 +369,13 @@ def summarize(df: pd.DataFrame) -> dict[str, Any]:
         "time_median_s": stat(np.median),
         # Throughput: every assembly attempt's simulated time (a failed one until it was given
         # up; a missed grasp costs none) over the pegs assembled.
-        "time_per_assembled_s": float(np.nansum(df["assembly_time"].to_numpy(float)) / len(ok))
+        "time_per_assembled_s": float(np.nansum(df["assembly_time_s"].to_numpy(float))
+                                      / len(ok))
         if len(ok) else None,
         "abs_grasp_offset_mean_mm": float(np.nanmean(np.abs(df["grasp_offset_mm"])))
         if df["grasp_offset_mm"].notna().any() else None,
         "failure_reasons": {str(k): int(v) for k, v in
-                            df.loc[~df["success"].astype(bool), "failure_reason"]
+                            df.loc[~df["assembly_success"].astype(bool), "failure_reason"]
                             .value_counts().items()},
     }
 
@@ -415,18 +418,36 @@ def _prepare(cfg: ExperimentConfig, spec: EvalSpec, out: Path,
     return rows
 
 
+def table_order(columns: list[str]) -> list[str]:
+    """``columns`` in the order of an evaluation table: the row's place, the record, the
+    decision, the host (rows of journals written by earlier versions may order their keys
+    otherwise), any other column last."""
+    task = EpisodeTask(0, 0, PegConfig(), "")
+    template = ["index", "policy", "condition", "root_seed",
+                *_row(task, EpisodeRecord(0, 0.0, 0.0), {}, 0.0)]
+    return ([c for c in dict.fromkeys(template) if c in columns]
+            + [c for c in columns if c not in template])
+
+
+def write_tables(df: pd.DataFrame, out: Path) -> None:
+    """``out/episodes.parquet`` (units and descriptions in the fields' metadata) and
+    ``out/episodes.csv``, each written whole and renamed into place."""
+    for name, write in (("episodes.parquet", lambda p: write_parquet(df, p)),
+                        ("episodes.csv", lambda p: df.to_csv(p, index=False))):
+        tmp = out / f".{name}.tmp"
+        write(tmp)
+        os.replace(tmp, out / name)
+
+
 def _finish(spec: EvalSpec, out: Path, rows: dict[int, dict[str, Any]]) -> pd.DataFrame:
     label = policy_label(spec.policy)
     df = pd.DataFrame([rows[i] for i in range(spec.episodes)]).drop(columns="job")
     df.insert(1, "policy", label)
     df.insert(2, "condition", spec.condition)
     df.insert(3, "root_seed", spec.seed)
-    # Each file is written whole and renamed into place; summary.json, which marks the
-    # evaluation finished, comes last.
-    for name, write in (("episodes.parquet", df.to_parquet), ("episodes.csv", df.to_csv)):
-        tmp = out / f".{name}.tmp"
-        write(tmp, index=False)
-        os.replace(tmp, out / name)
+    df = df[table_order(list(df.columns))]
+    # summary.json, which marks the evaluation finished, comes last.
+    write_tables(df, out)
     write_json(out / "summary.json", {"policy": label, "condition": spec.condition,
                                       **summarize(df)})
     return df
@@ -494,7 +515,7 @@ def _evaluate_locked(cfg: ExperimentConfig, jobs: list[tuple[EvalSpec, Path]],
                     journals[job].write(encode_row(row))
                     journals[job].flush()
                     bar.update(1)
-                    finished, ok = finished + 1, ok + int(bool(row["success"]))
+                    finished, ok = finished + 1, ok + int(bool(row["assembly_success"]))
                     bar.set_postfix(success=f"{ok / finished:.2f}")
                     if not progress and (finished % log_every == 0 or finished == len(tasks)):
                         print(f"{desc}: {total - len(tasks) + finished}/{total} episodes, "

@@ -26,7 +26,6 @@ reproduces vgs's own Q values.
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -39,6 +38,7 @@ from vgs.experiments.policies import load_trained_agent
 from vgs.grasping.densenet import _DenseBlock
 from vgs.grasping.network import GraspQNetwork, padded_size
 from vgs.grasping.preprocess import IMAGENET_MEAN, IMAGENET_STD
+from vgs.jsonsafe import dumps
 
 FORMAT = "vgs-grasp-q/1"
 WEIGHT_SUFFIXES = (".pt", ".pth")
@@ -154,5 +154,5 @@ def export_policy(run_dir: Path, out: Path) -> PolicyExport:
     out.parent.mkdir(parents=True, exist_ok=True)
     torch.save(weights, out)
     json_path = out.with_suffix(".json")
-    json_path.write_text(json.dumps(description, indent=1, allow_nan=False))
+    json_path.write_text(dumps(description, indent=1))
     return PolicyExport(out, json_path, description["values"])

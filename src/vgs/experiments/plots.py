@@ -192,7 +192,7 @@ def sweep_figure(rows: Sequence[dict[str, Any]], summary: Sequence[dict[str, Any
     offsets = np.array([s["offset_mm"] for s in summary])
     fig, (ax, ax_a, ax_s) = plt.subplots(3, 1, figsize=(8, 10), sharex=True,
                                          height_ratios=[2, 1.2, 1], layout="constrained")
-    ok = [r for r in rows if r["success"]]
+    ok = [r for r in rows if r["assembly_success"]]
     rng = np.random.default_rng(0)  # jitter of the faint points only
     spacing = np.min(np.diff(offsets)) if offsets.size > 1 else 10.0
     jitter = rng.uniform(-0.12, 0.12, len(ok)) * spacing

@@ -102,9 +102,10 @@ def _mean_success(times: np.ndarray, ok: np.ndarray) -> float:
 
 
 def time_arrays(df: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
-    """``(assembly_time, success)`` of an evaluation table, ordered by episode index."""
+    """``(assembly_time_s, assembly_success)`` of an evaluation table, ordered by episode
+    index."""
     df = df.sort_values("index")
-    return df["assembly_time"].to_numpy(float), df["success"].to_numpy(bool)
+    return df["assembly_time_s"].to_numpy(float), df["assembly_success"].to_numpy(bool)
 
 
 def gain_pct(tb: np.ndarray, ob: np.ndarray, tv: np.ndarray, ov: np.ndarray) -> float:
@@ -145,7 +146,8 @@ def efficiency_gain(base: pd.DataFrame, vgs: pd.DataFrame, resamples: int = BOOT
 
 
 def load_results(out: Path) -> pd.DataFrame:
-    """All evaluation tables under ``out/eval`` in one frame.
+    """All evaluation tables under ``out/eval`` in one frame, in the column vocabulary of
+    :mod:`vgs.columns` (tables published with the legacy names are renamed on load).
 
     Raises:
         ConfigError: If there are none.
@@ -215,15 +217,15 @@ def _color(policy: str) -> str:
 
 def plot_times(df: pd.DataFrame, condition: str, path: Path) -> Path:
     """Assembly time of every successful test episode (left) and their distribution (right)."""
-    part = df[(df["condition"] == condition) & df["success"].astype(bool)]
+    part = df[(df["condition"] == condition) & df["assembly_success"].astype(bool)]
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4))
-    times_all = part["assembly_time"].to_numpy(float)
+    times_all = part["assembly_time_s"].to_numpy(float)
     bins = (np.linspace(times_all.min(), times_all.max(), 30) if times_all.size > 1 else 10)
     for policy in policy_order(sorted(set(df["policy"]))):
         mine = part[part["policy"] == policy]
         if mine.empty:
             continue
-        t = mine["assembly_time"].to_numpy(float)
+        t = mine["assembly_time_s"].to_numpy(float)
         ax1.plot(mine["index"], t, ".", ms=4, alpha=0.7, color=_color(policy),
                  label=f"{policy} (mean {t.mean():.1f} s, n={t.size})")
         ax1.axhline(t.mean(), color=_color(policy), lw=1)
@@ -496,7 +498,7 @@ def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
         doc.table(header, rows)
         fig = plot_times(df, condition, figures / f"times_{condition}.png")
         doc.img(fig, f"Assembly times, {CONDITION_TITLES[condition]}")
-        reasons = df[(df["condition"] == condition) & ~df["success"].astype(bool)]
+        reasons = df[(df["condition"] == condition) & ~df["assembly_success"].astype(bool)]
         if len(reasons):
             counts = reasons.groupby(["policy", "failure_reason"]).size()
             doc.p("Failures: " + "; ".join(f"{p} {r} x{n}" for (p, r), n in counts.items())

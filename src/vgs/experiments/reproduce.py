@@ -40,7 +40,7 @@ import pandas as pd
 
 from vgs.config import ExperimentConfig, to_dict
 from vgs.errors import ConfigError, CorruptFileError
-from vgs.experiments.evaluate import EvalSpec, evaluate_many, summarize
+from vgs.experiments.evaluate import EvalSpec, evaluate_many, summarize, write_tables
 from vgs.experiments.layout import eval_jobs, train_runs
 from vgs.experiments.report import build_report
 from vgs.experiments.train import git_revision, train
@@ -191,10 +191,7 @@ class Reproduction:
             df["index"] = range(len(df))
         dest = self.out / "eval" / label / condition
         dest.mkdir(parents=True, exist_ok=True)
-        for name, write in (("episodes.parquet", df.to_parquet), ("episodes.csv", df.to_csv)):
-            tmp = dest / f".{name}.tmp"
-            write(tmp, index=False)
-            os.replace(tmp, dest / name)
+        write_tables(df, dest)
         write_json(dest / "summary.json", {"policy": label, "condition": condition,
                                            **summarize(df)})
 

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from vgs import checkpoint
+from vgs.columns import as_bool
 from vgs.config import ExperimentConfig, from_dict
 from vgs.errors import ConfigError, CorruptFileError
 from vgs.experiments.journal import read_journal
@@ -170,7 +171,7 @@ def eval_progress(folder: Path, name: str | None = None, total: int | None = Non
         notes.append("no meta.json: the planned number of episodes is unknown (a resume with "
                      "the same command checks every row and writes it again)")
     if rows:
-        ok = sum(bool(r["success"]) for r in rows)
+        ok = sum(bool(r["assembly_success"]) for r in rows)
         notes.append(f"assembled {ok}/{len(rows)}")
         if not finished and total is not None and done >= total:
             notes.append("all episodes in, tables written when the evaluation ends")
@@ -200,10 +201,9 @@ def _number(value: object) -> float | None:
 
 
 def _flag(value: object) -> int:
-    try:
-        return int(float(value))  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        return 0
+    """A boolean cell of ``episodes.csv``: ``True``/``False`` (0/1 in tables written before
+    booleans were stored as booleans); anything else counts 0."""
+    return int(bool(as_bool(value)))
 
 
 def folder_status(path: Path) -> list[tuple[str, list[Progress]]]:

@@ -31,18 +31,21 @@ from tqdm import tqdm
 
 from vgs.assembly.episode import EpisodeRunner, offset_policy
 from vgs.assembly.record import PHASES
+from vgs.columns import column, normalize_row
 from vgs.config import CellConfig, ExperimentConfig, PegConfig
 from vgs.errors import ConfigError, VGSError
 from vgs.experiments.stats import population_std
-from vgs.jsonsafe import json_safe
+from vgs.jsonsafe import dumps
 from vgs.runfolder import host, hosts_of
 from vgs.sim.rg2 import PAD_HALF
 
 # The sweep keeps the pad's near edge this far inside the peg's end (pads are 22 mm long).
 END_MARGIN = 0.015
 
+# Column vocabulary of vgs.columns (before 2026-12 the peg was mass_kg, length_mm and the
+# outcome success: the journal reader renames them).
 COLUMNS: tuple[str, ...] = (
-    "offset_mm", "mass_kg", "length_mm", "success", "assembly_time_s",
+    "offset_mm", "peg_mass_kg", "peg_length_mm", "assembly_success", "assembly_time_s",
     *(f"time_{p}_s" for p in PHASES),
     "adjustments", "retries", "failure_reason", "seed", "trial", "grasp_offset_mm",
     "peg_turn_deg", "peak_grasp_moment_nm", "peak_moment_measured_nm", "host_cpu",
@@ -165,26 +168,11 @@ def _run_trial(trial: Trial) -> tuple[int, dict[str, Any]]:
     if _RUNNER is None:
         raise VGSError("sweep worker used before its initialisation")
     record, _, _ = _RUNNER.run(trial.seed, offset_policy(trial.offset), peg=trial.peg)
-    row = record.to_row()
-    out = {
-        "offset_mm": trial.offset * 1000.0,
-        "mass_kg": trial.peg.mass,
-        "length_mm": trial.peg.length * 1000.0,
-        "success": bool(row["success"]),
-        "assembly_time_s": row["assembly_time"],
-        **{f"time_{p}_s": row[f"time_{p}_s"] for p in PHASES},
-        "adjustments": row["adjustments"],
-        "retries": row["retries"],
-        "failure_reason": row["failure_reason"],
-        "seed": trial.seed,
-        "trial": trial.trial,
-        "grasp_offset_mm": row["grasp_offset_mm"],
-        "peg_turn_deg": row["peg_turn_deg"],
-        "peak_grasp_moment_nm": row["peak_grasp_moment"],
-        "peak_moment_measured_nm": row["peak_moment_measured"],
-        **host(),  # MuJoCo's floating point differs between CPUs: rows say where they ran
-    }
-    return trial.index, out
+    # The record's row gives every column but the sweep's own (the peg of the record is the
+    # trial's); the host too: MuJoCo's floating point differs between CPUs.
+    row = {**record.to_row(), "offset_mm": trial.offset * 1000.0, "trial": trial.trial,
+           **host()}
+    return trial.index, {k: row[k] for k in COLUMNS}
 
 
 def run_sweep(cfg: ExperimentConfig, spec: SweepSpec, workers: int | None = None,
@@ -242,25 +230,30 @@ def read_journal(path: Path, trials: Sequence[Trial]) -> dict[int, dict[str, Any
             if n == len(lines):
                 break  # torn last line: run it again
             raise VGSError(f"{path}:{n}: not a sweep row; remove the file to start over") from None
-        index = doc.pop("index", None)
+        index = doc.pop("index", None) if isinstance(doc, dict) else None
         if not isinstance(index, int) or not 0 <= index < len(trials):
             raise VGSError(f"{path}:{n}: a row of another sweep (index {index!r}); use another "
                            "--out or remove the file")
         t = trials[index]
+        doc = normalize_row(doc)  # legacy names renamed, null floats back to NaN
         expected = (round(t.offset * 1000.0, 6), t.seed, round(t.peg.mass, 9),
                     round(t.peg.length * 1000.0, 6))
-        found = (round(float(doc.get("offset_mm", math.nan)), 6), doc.get("seed"),
-                 round(float(doc.get("mass_kg", math.nan)), 9),
-                 round(float(doc.get("length_mm", math.nan)), 6))
+        found = (round(_number(doc.get("offset_mm")), 6), doc.get("seed"),
+                 round(_number(doc.get("peg_mass_kg")), 9),
+                 round(_number(doc.get("peg_length_mm")), 6))
         if found != expected:
             raise VGSError(f"{path}:{n}: a row of another sweep (offset, seed or peg differ from "
                            "this sweep's plan); use another --out or remove the file")
-        rows[index] = {k: (math.nan if doc.get(k) is None and k in _FLOAT_COLUMNS else doc.get(k))
-                       for k in COLUMNS}
+        rows[index] = {k: (math.nan if doc.get(k) is None and column(k).kind == "float"
+                           else doc.get(k)) for k in COLUMNS}
     return rows
 
 
-_FLOAT_COLUMNS = frozenset(c for c in COLUMNS if c.endswith(("_s", "_mm", "_deg", "_nm", "_kg")))
+def _number(value: Any) -> float:
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return math.nan
 
 
 @contextmanager
@@ -272,7 +265,7 @@ def _appender(path: Path | None) -> Iterator[Callable[[dict[str, Any]], None]]:
     path.parent.mkdir(parents=True, exist_ok=True)
     with path.open("a") as fh:
         def write(row: dict[str, Any]) -> None:
-            fh.write(json.dumps(json_safe(row), allow_nan=False) + "\n")
+            fh.write(dumps(row) + "\n")
             fh.flush()
 
         yield write
@@ -321,7 +314,7 @@ def sweep_to_folder(cfg: ExperimentConfig, spec: SweepSpec, out: Path,
     doc = {"profile": cfg.name, "seed": spec.seed, "trials": spec.trials,
            "mass_range": spec.mass_range, "length_range": spec.length_range,
            "offsets": summary, "paired": paired_analysis(rows), "hosts": hosts_of(rows)}
-    (out / "summary.json").write_text(json.dumps(json_safe(doc), indent=2) + "\n")
+    (out / "summary.json").write_text(dumps(doc, indent=2) + "\n")
     return summary
 
 
@@ -334,7 +327,8 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     out = []
     for offset in sorted({r["offset_mm"] for r in rows}):
         group = [r for r in rows if r["offset_mm"] == offset]
-        times = np.array([r["assembly_time_s"] for r in group if r["success"]], dtype=float)
+        times = np.array([r["assembly_time_s"] for r in group if r["assembly_success"]],
+                         dtype=float)
         out.append({
             "offset_mm": offset,
             "n": len(group),
@@ -348,7 +342,7 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
             "retry_rate": float(np.mean([r.get("retries", 0) > 0 for r in group])),
             "peg_lost": sum(r["failure_reason"] == "peg_lost" for r in group),
             "time_align_mean_s": _stat(np.array([r["time_align_s"] for r in group
-                                                 if r["success"]], dtype=float), np.mean),
+                                                 if r["assembly_success"]], dtype=float), np.mean),
         })
     return out
 
@@ -391,7 +385,7 @@ def paired_analysis(rows: Sequence[dict[str, Any]], resamples: int = BOOTSTRAP_R
 
     def ok_time(t: int, o: float, key: str) -> float:
         r = table.get((t, o))
-        return float(r[key]) if r is not None and r["success"] else math.nan
+        return float(r[key]) if r is not None and r["assembly_success"] else math.nan
 
     if 0.0 in offsets:
         for o in offsets:
@@ -434,7 +428,7 @@ def paired_analysis(rows: Sequence[dict[str, Any]], resamples: int = BOOTSTRAP_R
         entry = {"abs_offset_mm": o}
         for side, v in (("plus", o), ("minus", -o)):
             group = [table[(int(t), v)] for t in scenes if (int(t), v) in table]
-            k, n = sum(bool(r["success"]) for r in group), len(group)
+            k, n = sum(bool(r["assembly_success"]) for r in group), len(group)
             entry[f"{side}_success"] = [k, n]
             entry[f"{side}_success_ci"] = list(wilson_interval(k, n))
 

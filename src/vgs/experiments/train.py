@@ -71,12 +71,15 @@ from vgs.runfolder import check_request, host, locked, read_json, write_json
 from vgs.sim.camera import Heightmap
 from vgs.validate import check_config
 
+# Column vocabulary of vgs.columns; booleans are written True/False (0/1 before 2026-12).
 CSV_COLUMNS = (
     "episode", "mode", "seed", "epsilon", "explored", "rotation", "row", "col", "q_value",
     "grasp_success", "grasp_offset_mm", "assembly_success", "assembly_time_s", "adjustments",
     "failure_reason", "r_grasp", "r_assembly", "reward", "threshold_s", "loss", "delta_q",
     "wall_s",
 )
+RECORD_COLUMNS = ("grasp_success", "grasp_offset_mm", "assembly_success", "assembly_time_s",
+                  "adjustments", "failure_reason")  # from EpisodeRecord.to_row()
 
 
 def episode_seed(root: int, episode: int) -> int:
@@ -427,16 +430,13 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
             monitor.update(stats["delta_q"])
 
             wall = time.perf_counter() - t0
+            record_row = record.to_row()
             row = {
                 "episode": episode, "mode": mode, "seed": seed, "epsilon": round(epsilon, 4),
-                "explored": int(action.explored), "rotation": action.rotation, "row": action.row,
-                "col": action.col, "q_value": action.q_value,
-                "grasp_success": int(record.grasp_success),
-                "grasp_offset_mm": record.grasp_offset * 1000.0,
-                "assembly_success": int(record.success),
-                "assembly_time_s": record.assembly_time, "adjustments": record.adjustments,
-                "failure_reason": record.failure_reason, "r_grasp": r_grasp,
-                "r_assembly": r_asm, "reward": reward,
+                "explored": bool(action.explored), "rotation": action.rotation,
+                "row": action.row, "col": action.col, "q_value": action.q_value,
+                **{k: record_row[k] for k in RECORD_COLUMNS},
+                "r_grasp": r_grasp, "r_assembly": r_asm, "reward": reward,
                 "threshold_s": threshold if math.isfinite(threshold) else "",
                 "loss": stats["loss"], "delta_q": stats["delta_q"], "wall_s": round(wall, 3),
             }

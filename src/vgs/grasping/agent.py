@@ -188,7 +188,9 @@ class DeltaQMonitor:
         """Restore a :meth:`state_dict`."""
         self.threshold = float(state["threshold"])
         self.window = int(state["window"])
-        self._values = deque((float(v) for v in state["values"]), maxlen=self.window)
+        # (the checkpoint's strict JSON holds a NaN as null)
+        self._values = deque((math.nan if v is None else float(v) for v in state["values"]),
+                             maxlen=self.window)
 
 
 class GraspAgent:

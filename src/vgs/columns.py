@@ -1,0 +1,275 @@
+"""The column vocabulary of every table and journal vgs writes, with units.
+
+One name means one quantity in one unit wherever it appears: the evaluation tables
+(``episodes.parquet``, ``episodes.csv``) and their ``journal.jsonl``, training's
+``episodes.csv``, the sweep's ``sweep.csv`` and its ``journal.jsonl``. A name carries its unit
+as a suffix (``_s``, ``_h``, ``_mm``, ``_kg``, ``_nm`` for N m, ``_deg``, ``_pct``);
+booleans are stored as booleans. :data:`COLUMNS` gives each name its unit, kind and a one-line
+description; parquet files carry the unit and the description in each field's metadata
+(:func:`write_parquet`). The summary tables built from them (the report's ``results.csv``,
+``seeds.csv``) are listed in :data:`SUMMARY_COLUMNS`.
+
+:data:`LEGACY` maps each name that tables used before (and that the attributes of
+:class:`vgs.assembly.record.EpisodeRecord` still use, in SI units) to its name here, with the
+factor that converts the value; readers apply it on load (:func:`normalize`,
+:func:`normalize_row`), so results published before keep loading.
+
+Torch-, pandas- and MuJoCo-free at import (``vgs status`` uses it).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+UNIT_SUFFIXES: dict[str, str] = {"s": "_s", "h": "_h", "mm": "_mm", "kg": "_kg", "N m": "_nm",
+                                 "deg": "_deg", "%": "_pct"}
+KINDS = ("bool", "int", "float", "str")
+
+
+@dataclass(frozen=True)
+class Column:
+    """One column.
+
+    Attributes:
+        unit: Physical unit (a key of :data:`UNIT_SUFFIXES`), or ``""`` for counts, indices,
+            labels, ratios and booleans.
+        kind: ``bool``, ``int``, ``float`` or ``str``.
+        description: One line.
+    """
+
+    unit: str
+    kind: str
+    description: str
+
+
+PHASE_NAMES = ("transport", "approach", "search", "slide", "align", "insert")
+
+COLUMNS: dict[str, Column] = {
+    # which row
+    "index": Column("", "int", "episode index within the evaluation's plan"),
+    "job": Column("", "int", "which of the evaluations run together the row belongs to "
+                             "(journal only)"),
+    "policy": Column("", "str", "policy label: baseline, vgs, center, random or a user policy"),
+    "condition": Column("", "str", "test condition: nominal, mass or length"),
+    "root_seed": Column("", "int", "root seed of the evaluation"),
+    "train_run": Column("", "str", "training run the policy comes from, <mode>_s<seed> (tables "
+                                   "merged over training seeds)"),
+    "episode": Column("", "int", "training episode number, from 0"),
+    "mode": Column("", "str", "training mode: vgs or baseline"),
+    "trial": Column("", "int", "sweep scene number: the same scene at every offset"),
+    "seed": Column("", "int", "episode seed: peg pose, hole displacement, sensor noise"),
+    # the peg and the scene
+    "offset_mm": Column("mm", "float", "commanded grasp offset from the visible peg centre "
+                                       "along its axis (sweep)"),
+    "peg_mass_kg": Column("kg", "float", "peg mass"),
+    "peg_length_mm": Column("mm", "float", "peg length"),
+    "hole_offset_mm": Column("mm", "float", "ground truth: displacement of the hole from its "
+                                            "nominal position"),
+    # the episode's outcome (the episode record)
+    "grasp_success": Column("", "bool", "the RG2 holds the peg after the lift"),
+    "grasp_offset_mm": Column("mm", "float", "ground truth, analysis only: signed distance "
+                                             "along the peg axis from the centre of mass to the "
+                                             "grasp point (NaN when not grasped)"),
+    "assembly_success": Column("", "bool", "the peg ended inserted to the insertion depth"),
+    "failure_reason": Column("", "str", "empty on success, else what stopped the episode "
+                                        "(grasp, timeout:<phase>, dropped, unstable, "
+                                        "not_inserted, peg_lost, error:..., worker_lost)"),
+    "assembly_time_s": Column("s", "float", "simulated time from the end of the grasp to the "
+                                            "end of the insertion (NaN without an assembly)"),
+    **{f"time_{p}_s": Column("s", "float", f"simulated time spent in the {p} phase")
+       for p in PHASE_NAMES},
+    "adjustments": Column("", "int", "alignment adjustments (wiggle iterations)"),
+    "retries": Column("", "int", "new searches after a wrong contact-state decision"),
+    "final_tilt_deg": Column("deg", "float", "ground truth: tilt of the peg axis from vertical "
+                                             "at the end"),
+    "insertion_depth_mm": Column("mm", "float", "ground truth: depth of the peg's lower end "
+                                                "below the hole entrance at the end"),
+    "peak_moment_measured_nm": Column("N m", "float", "largest moment about the pinch axis "
+                                                      "the F/T sensor measured in contact"),
+    "peg_turn_deg": Column("deg", "float", "ground truth, analysis only: largest turn of the "
+                                           "peg's axis in the pads between grasp and release"),
+    "peak_grasp_moment_nm": Column("N m", "float", "ground truth, analysis only: largest "
+                                                   "moment about the pinch axis the fingers "
+                                                   "exerted on the peg during the assembly"),
+    # the policy's decision
+    "rotation": Column("", "int", "index of the grasp rotation (-1: no network decision)"),
+    "row": Column("", "int", "heightmap row of the grasp pixel (-1: none)"),
+    "col": Column("", "int", "heightmap column of the grasp pixel (-1: none)"),
+    "q_value": Column("", "float", "Q value of the chosen pixel (NaN when not computed)"),
+    "epsilon": Column("", "float", "exploration probability of the episode"),
+    "explored": Column("", "bool", "the grasp was a random exploration pixel"),
+    # learning
+    "r_grasp": Column("", "float", "grasp reward r_G"),
+    "r_assembly": Column("", "float", "assembly reward r_AM"),
+    "reward": Column("", "float", "reward R = r_G + r_AM"),
+    "threshold_s": Column("s", "float", "assembly-time threshold of r_AM (empty before one "
+                                        "exists)"),
+    "loss": Column("", "float", "TD loss of the update"),
+    "delta_q": Column("", "float", "|Q - y| of the executed action before the update"),
+    # where and how long
+    "wall_s": Column("s", "float", "wall-clock time the episode took in its process"),
+    "host_cpu": Column("", "str", "CPU model of the host that ran the episode"),
+    "mujoco_version": Column("", "str", "MuJoCo version of that host"),
+}
+
+_RATE = "fraction of the episodes"
+SUMMARY_COLUMNS: dict[str, Column] = {
+    "condition": COLUMNS["condition"],
+    "policy": COLUMNS["policy"],
+    "train_run": Column("", "str", "training run, or mean over the training runs"),
+    "source": Column("", "str", "results folder the run was read from"),
+    "episodes": Column("", "int", "test episodes"),
+    "successes": Column("", "int", "successful assemblies"),
+    "grasp_success_rate": Column("", "float", f"{_RATE} with a held grasp"),
+    "success_rate": Column("", "float", f"{_RATE} assembled"),
+    "time_total_h": Column("h", "float", "total assembly time of the successes"),
+    **{f"time_{stat}_s": Column("s", "float", f"{stat} assembly time of the successes")
+       for stat in ("mean", "std", "min", "max", "median")},
+    "time_per_assembled_s": Column("s", "float", "assembly time of all attempts, failed ones "
+                                                 "included, per assembled peg"),
+    "abs_grasp_offset_mean_mm": Column("mm", "float", "mean |grasp offset| from the centre of "
+                                                      "mass"),
+    "gain_pct": Column("%", "float", "efficiency gain over the baseline, "
+                                     "(T_base - T) / T_base"),
+    "gain_ci_low": Column("%", "float", "lower end of the gain's 95 % interval"),
+    "gain_ci_high": Column("%", "float", "upper end of the gain's 95 % interval"),
+    "gain_sd_between_seeds": Column("%", "float", "standard deviation of the gain between "
+                                                  "training runs"),
+    "seeds_with_positive_gain": Column("", "int", "training runs whose gain is positive"),
+    "seeds": Column("", "int", "training runs averaged"),
+    **{f"{name}_{policy}": Column(col.unit, col.kind, f"{col.description}, {policy}")
+       for policy in ("baseline", "vgs")
+       for name, col in (
+           ("successes", Column("", "int", "successful assemblies")),
+           ("grasp_success", Column("", "float", f"{_RATE} with a held grasp")),
+           ("offset_mm", Column("mm", "float", "mean |grasp offset| from the centre of mass")),
+           ("time_mean_s", Column("s", "float", "mean assembly time of the successes")),
+           ("time_per_assembled_s", Column("s", "float", "assembly time per assembled peg, "
+                                                         "failed attempts included")))},
+}
+
+# Legacy name -> (name, factor that converts the value). The attributes of the episode record
+# keep the legacy names (SI units), so EpisodeRecord.to_row() goes through this mapping too.
+LEGACY: dict[str, tuple[str, float]] = {
+    "peg_mass": ("peg_mass_kg", 1.0),  # evaluation tables and journals before 2026-12
+    "mass_kg": ("peg_mass_kg", 1.0),  # sweep
+    "peg_length": ("peg_length_mm", 1000.0),  # [m]
+    "length_mm": ("peg_length_mm", 1.0),  # sweep
+    "grasp_offset": ("grasp_offset_mm", 1000.0),  # [m]
+    "success": ("assembly_success", 1.0),
+    "assembly_time": ("assembly_time_s", 1.0),
+    "peak_moment_measured": ("peak_moment_measured_nm", 1.0),
+    "peak_grasp_moment": ("peak_grasp_moment_nm", 1.0),
+}
+
+
+def column(name: str) -> Column:
+    """The column ``name`` (:data:`COLUMNS`, then :data:`SUMMARY_COLUMNS`).
+
+    Raises:
+        KeyError: If vgs writes no such column.
+    """
+    found = COLUMNS.get(name) or SUMMARY_COLUMNS.get(name)
+    if found is None:
+        raise KeyError(f"{name!r} is not a column of vgs's tables")
+    return found
+
+
+def as_bool(value: Any) -> bool | None:
+    """A boolean cell as written by any vgs version (True/False, 1/0, their strings), or None
+    when it is none of them (empty, NaN)."""
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, int | float) and value in (0, 1):
+        return bool(value)
+    if type(value).__module__ == "numpy" and hasattr(value, "item"):
+        return as_bool(value.item())
+    if isinstance(value, str):
+        return {"true": True, "false": False, "1": True, "0": False, "1.0": True,
+                "0.0": False}.get(value.strip().lower())
+    return None
+
+
+def normalize_row(row: dict[str, Any]) -> dict[str, Any]:
+    """A row (a journal line, a record's fields) in this vocabulary: legacy names renamed and
+    converted (:data:`LEGACY`; a legacy name whose new name is already there is dropped), JSON
+    ``null`` in float columns back to NaN, booleans as booleans. Keys keep their order."""
+    out: dict[str, Any] = {}
+    for key, value in row.items():
+        if key in LEGACY:
+            new, factor = LEGACY[key]
+            if new in row:
+                continue
+            if factor != 1.0 and isinstance(value, int | float) and not isinstance(value, bool):
+                value = value * factor
+            key = new
+        out[key] = value
+    for key, value in out.items():
+        col = COLUMNS.get(key)
+        if col is None:
+            continue
+        if col.kind == "float" and value is None:
+            out[key] = math.nan
+        elif col.kind == "bool" and not isinstance(value, bool):
+            flag = as_bool(value)
+            if flag is not None:
+                out[key] = flag
+    return out
+
+
+def normalize(df: Any) -> Any:
+    """A table (pandas DataFrame) in this vocabulary: legacy columns renamed and converted
+    (:data:`LEGACY`; one whose new name is already there is dropped), boolean columns written
+    as 0/1 or as strings made booleans. Returns a new frame; the column order is kept."""
+    df = df.copy()
+    drop = [old for old, (new, _) in LEGACY.items() if old in df.columns and new in df.columns]
+    df = df.drop(columns=drop)
+    for old, (_, factor) in LEGACY.items():
+        if old in df.columns and factor != 1.0:
+            df[old] = df[old] * factor
+    df = df.rename(columns={old: new for old, (new, _) in LEGACY.items() if old in df.columns})
+    for name in df.columns:
+        col = COLUMNS.get(name)
+        if col is None or col.kind != "bool" or str(df[name].dtype) == "bool":
+            continue
+        flags = [as_bool(v) for v in df[name]]
+        if all(f is not None for f in flags):
+            df[name] = flags
+            df[name] = df[name].astype(bool)
+    return df
+
+
+def field_metadata(name: str) -> dict[str, str]:
+    """``{"unit": ..., "description": ...}`` of a column (empty for one vgs does not know)."""
+    try:
+        col = column(name)
+    except KeyError:
+        return {}
+    return {"unit": col.unit, "description": col.description}
+
+
+def write_parquet(df: Any, path: Path) -> None:
+    """Write a table (pandas DataFrame, no index) to ``path`` as parquet, each field's metadata
+    holding its ``unit`` and ``description``."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    table = pa.Table.from_pandas(df, preserve_index=False)
+    fields = [f.with_metadata(field_metadata(f.name)) if field_metadata(f.name) else f
+              for f in table.schema]
+    schema = pa.schema(fields, metadata=table.schema.metadata)
+    pq.write_table(pa.Table.from_arrays(table.columns, schema=schema), path)
+
+
+def markdown(names: Any = None) -> str:
+    """The vocabulary (or the columns ``names``) as a Markdown table: name, unit, kind,
+    description."""
+    names = list(COLUMNS) if names is None else list(names)
+    lines = ["| column | unit | kind | description |", "|---|---|---|---|"]
+    for name in names:
+        col = column(name)
+        lines.append(f"| `{name}` | {col.unit or '-'} | {col.kind} | {col.description} |")
+    return "\n".join(lines) + "\n"
