@@ -381,6 +381,14 @@ def _verdict(condition: str, gain: Gain, base: dict[str, Any], vgs: dict[str, An
             f"{success}; std {_f(base['time_std_s'], 2)} vs {_f(vgs['time_std_s'], 2)} s.")
 
 
+ONE_STEP_TARGET = (
+    "Each grasp is a terminal one-step episode (the next peg is placed independently of it), "
+    "so the training target is y = R: gamma and the target network never affect learning, "
+    "Delta Q = |R - Q_eva| of the grasp's own update, and a run counts as delta-Q converged "
+    "when that Delta Q stayed below `agent.delta_q_threshold` in each of its last "
+    "`agent.delta_q_window` episodes (the window's maximum, not its mean).")
+
+
 def _training_rows(out: Path) -> list[list[str]]:
     rows = []
     for run in sorted((out / "train").glob("*")):
@@ -511,6 +519,7 @@ def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
     runs = [r for r in sorted((out / "train").glob("*")) if (r / "episodes.csv").exists()]
     if runs:
         doc.h(2, "Training")
+        doc.p(ONE_STEP_TARGET)
         doc.table(["run", "episodes", "grasp success", "assembly success (last 20 %)",
                    "mean |offset| last 20 % [mm]", "threshold [s]", "delta-Q converged"],
                   _training_rows(out))

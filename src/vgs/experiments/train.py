@@ -490,5 +490,5 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
     write_json(out / "convergence.json",
                {"delta_q_threshold": cfg.agent.delta_q_threshold,
                 "window": cfg.agent.delta_q_window, "converged": bool(monitor.converged),
-                "delta_q_window_mean": monitor.mean})
+                "delta_q_window_mean": monitor.mean, "delta_q_window_max": monitor.max})
     return out
