@@ -1,9 +1,10 @@
 """Runs that move between machines: compact checkpoints (the replay keeps scene seeds), old
-checkpoints that kept heightmaps, hosts that render differently. Physics-free
-(:mod:`experiments.fakes`)."""
+checkpoints that kept heightmaps, hosts that render differently, and published policy folders
+that ``vgs evaluate`` loads without the checkpoint. Physics-free (:mod:`experiments.fakes`)."""
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -147,3 +148,58 @@ def test_a_5000_grasp_light_checkpoint_fits_in_10_mb(tmp_path: Path) -> None:
         sizes[n] = (tmp_path / f"c{n}.pt").stat().st_size
     assert sizes[5000] <= 10_000_000
     assert (sizes[5000] - sizes[0]) / 5000 < 100  # bytes per transition (seed, action, ...)
+
+
+def test_a_policy_folder_evaluates_like_its_training_run(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A published run commits only its final network and run.json (``vgs export-policy RUN
+    --out FOLDER``); ``vgs evaluate --policy FOLDER`` on a fresh clone acts as the run did."""
+    run = tmp_path / "run"
+    assert vgs(capsys, *TRAIN, "--out", str(run))[0] == 0
+    assert main(["export-policy", str(run), "--out", str(tmp_path / "export" / "vgs")]) == 0
+    assert "vgs evaluate --policy" in capsys.readouterr().out
+    clone = tmp_path / "clone" / "docs" / "results" / "smoke" / "vgs"  # what git would check out
+    clone.mkdir(parents=True)
+    for name in ("run.json", "policy.pt", "policy.json"):
+        shutil.copy(tmp_path / "export" / "vgs" / name, clone / name)
+    evaluate = ["evaluate", "--episodes", "4", "--workers", "1", *fakes.CLI_FLAGS]
+    assert vgs(capsys, *evaluate, "--policy", str(run), "--out", str(tmp_path / "e_run"))[0] == 0
+    assert vgs(capsys, *evaluate, "--policy", str(clone), "--out",
+               str(tmp_path / "e_pub"))[0] == 0
+    a, b = (pd.read_parquet(tmp_path / e / "episodes.parquet").drop(columns="wall_s")
+            for e in ("e_run", "e_pub"))
+    assert (a["rotation"] >= 0).all()  # the network chose every grasp
+    pd.testing.assert_frame_equal(a, b)
+    assert pd.read_json(tmp_path / "e_pub" / "meta.json", typ="series")[
+        "policy_trained_episodes"] == 6
+    # what a folder of the wrong files gets: one line
+    (clone / "policy.json").unlink()
+    one_line(*vgs(capsys, *evaluate, "--policy", str(clone), "--out", str(tmp_path / "e3")),
+             "policy.json")
+    one_line(*vgs(capsys, "export-policy", str(run), "--out", str(tmp_path / "e_run")),
+             "out")  # a folder holding something else is not overwritten
+
+
+def test_a_published_reproduction_commits_its_final_networks(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``vgs report DIR --publish DEST`` writes DEST/<mode>/ policy folders beside the tables,
+    and ``vgs evaluate --policy DEST/<mode>`` acts as the run's checkpoint does."""
+    repro, pub = tmp_path / "repro", tmp_path / "pub"
+    flags = [*fakes.CLI_FLAGS, "--set", "reproduce.conditions=(nominal,)"]
+    assert vgs(capsys, "reproduce", "--out", str(repro), "--workers", "1", "--stages",
+               "train,evaluate,report", *flags)[0] == 0
+    capsys.readouterr()
+    assert main(["report", str(repro), "--publish", str(pub)]) == 0
+    out = capsys.readouterr().out
+    assert "with the final networks of 2 runs" in out
+    for mode in ("baseline", "vgs"):
+        assert sorted(p.name for p in (pub / mode).iterdir()) == ["policy.json", "policy.pt",
+                                                                  "run.json"]
+    assert not list(pub.rglob("checkpoint.pt"))
+    evaluate = ["evaluate", "--episodes", "4", "--workers", "1", *fakes.CLI_FLAGS]
+    for policy, folder in ((repro / "train" / "vgs_s0", "a"), (pub / "vgs", "b")):
+        assert vgs(capsys, *evaluate, "--policy", str(policy), "--out",
+                   str(tmp_path / folder))[0] == 0
+    a, b = (pd.read_parquet(tmp_path / e / "episodes.parquet").drop(columns="wall_s")
+            for e in "ab")
+    pd.testing.assert_frame_equal(a, b)

@@ -563,13 +563,18 @@ PUBLISHED = ("reproduce.json", "report.md", "report.html", "results.csv", "figur
 
 def publish(out: Path, dest: Path) -> list[Path]:
     """Copy the small result files of a reproduction (no checkpoints, no TensorBoard logs, no
-    journals) from ``out`` to ``dest`` (e.g. ``docs/results/quick``), keeping the layout.
+    journals) from ``out`` to ``dest`` (e.g. ``docs/results/quick``), keeping the layout, and
+    the final networks of each finished training run as a policy folder ``dest/<mode>/``
+    (``dest/<run>/`` when a mode has several runs): ``policy.pt``, ``policy.json`` and
+    ``run.json``, which ``vgs evaluate --policy dest/<mode>`` loads on a fresh clone
+    (:func:`vgs.experiments.export_policy.export_policy`).
 
     Returns:
         The copied files.
 
     Raises:
-        ConfigError: If ``out`` holds no report.
+        ConfigError: If ``out`` holds no report, or a policy folder in ``dest`` holds another
+            run.
     """
     if not (out / "report.md").exists():
         raise ConfigError("report", f"{out} holds no report.md; run vgs report first")
@@ -581,4 +586,14 @@ def publish(out: Path, dest: Path) -> list[Path]:
                 target.parent.mkdir(parents=True, exist_ok=True)
                 shutil.copy2(src, target)
                 copied.append(target)
+    finished = [run for run in sorted((out / "train").glob("*"))
+                if (run / "checkpoint.pt").exists() and (run / "convergence.json").exists()]
+    if finished:
+        from vgs.experiments.export_policy import export_policy
+
+        modes = [str(read_json(run / "run.json").get("mode")) for run in finished]
+        for run, mode in zip(finished, modes, strict=True):
+            folder = dest / (mode if modes.count(mode) == 1 else run.name)
+            written = export_policy(run, folder)
+            copied += [written.weights, written.description, folder / "run.json"]
     return copied
