@@ -26,11 +26,13 @@ MAY_IMPORT: dict[str, set[str]] = {
     "control": {"errors", "config", "sim"},
     "render": {"errors", "config", "sim"},
     "assembly": {"errors", "columns", "config", "sim", "control"},
-    "experiments": {"errors", "jsonsafe", "columns", "configdoc", "config", "validate", "checkpoint",
-                    "runfolder", "sim", "grasping", "control", "render", "assembly"},
+    "experiments": {"errors", "jsonsafe", "columns", "configdoc", "config", "validate",
+                    "checkpoint", "runfolder", "sim", "grasping", "control", "render",
+                    "assembly"},
     "envs": {"errors", "config", "sim", "grasping", "render", "assembly", "experiments"},
-    "cli": {"errors", "jsonsafe", "columns", "configdoc", "config", "validate", "checkpoint", "runfolder",
-            "sim", "grasping", "control", "render", "assembly", "experiments", "vgs"},
+    "cli": {"errors", "jsonsafe", "columns", "configdoc", "config", "validate", "checkpoint",
+            "runfolder", "sim", "grasping", "control", "render", "assembly", "experiments",
+            "vgs"},
     "vgs": {"envs"},  # the package's face: __version__ and the environment's registration
 }
 

@@ -1,10 +1,14 @@
-"""Training: a killed run resumes from its checkpoint with the same episode count and RNG."""
+"""Training: a killed run resumes from its checkpoint with the same episode count and RNG, in
+its folder or moved to another; the replay's re-rendered heightmaps are the ones it stored."""
 
 from __future__ import annotations
 
 import csv
+import shutil
 from pathlib import Path
+from typing import Any
 
+import numpy as np
 import pytest
 
 from vgs.config import ExperimentConfig, override, profile
@@ -26,11 +30,25 @@ def rows(run: Path) -> list[dict[str, str]]:
         return [{k: v for k, v in r.items() if k != "wall_s"} for r in csv.DictReader(f)]
 
 
-@pytest.mark.slow
-def test_killed_run_resumes_where_it_stopped(tmp_path: Path, monkeypatch) -> None:
-    cfg = tiny_config()
-    full = train_mod.train(cfg, "vgs", tmp_path / "full", progress=False)
+@pytest.fixture(scope="module")
+def full_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[int, Any]]:
+    """An uninterrupted run of :func:`tiny_config` (real physics) and the heightmaps each
+    episode stored in the replay, by scene seed."""
+    stored: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+    original = train_mod.ReplayBuffer.add
 
+    def recording_add(self, transition, surprise):
+        stored[transition.scene] = (transition.color.copy(), transition.depth.copy())
+        return original(self, transition, surprise)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(train_mod.ReplayBuffer, "add", recording_add)
+        run = train_mod.train(tiny_config(), "vgs", tmp_path_factory.mktemp("full") / "run",
+                              progress=False)
+    return run, stored
+
+
+def _killed_at_third_episode(out: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     calls = {"n": 0}
     original = train_mod.EpisodeRunner.run
 
@@ -42,14 +60,65 @@ def test_killed_run_resumes_where_it_stopped(tmp_path: Path, monkeypatch) -> Non
 
     monkeypatch.setattr(train_mod.EpisodeRunner, "run", dying_run)
     with pytest.raises(KeyboardInterrupt):
-        train_mod.train(cfg, "vgs", tmp_path / "resumed", progress=False)
-    assert [r["episode"] for r in rows(tmp_path / "resumed")] == ["0", "1"]
+        train_mod.train(tiny_config(), "vgs", out, progress=False)
     monkeypatch.setattr(train_mod.EpisodeRunner, "run", original)
-    train_mod.train(cfg, "vgs", tmp_path / "resumed", progress=False)
+    assert [r["episode"] for r in rows(out)] == ["0", "1"]
+
+
+@pytest.mark.slow
+def test_killed_run_resumes_where_it_stopped(tmp_path: Path, monkeypatch, full_run) -> None:
+    _killed_at_third_episode(tmp_path / "resumed", monkeypatch)
+    train_mod.train(tiny_config(), "vgs", tmp_path / "resumed", progress=False)
 
     resumed = rows(tmp_path / "resumed")
     assert [r["episode"] for r in resumed] == ["0", "1", "2"]
-    assert resumed == rows(full)  # same seeds, actions, rewards and losses
+    assert resumed == rows(full_run[0])  # same seeds, actions, rewards and losses
+
+
+@pytest.mark.slow
+def test_a_checkpoint_moved_to_another_folder_resumes_to_the_same_table(
+        tmp_path: Path, monkeypatch, full_run) -> None:
+    """The folder moves (another machine's checkout) and the resumed run renders every replayed
+    heightmap afresh (no cache): the table is the uninterrupted run's."""
+    _killed_at_third_episode(tmp_path / "here" / "run", monkeypatch)
+    moved = tmp_path / "elsewhere" / "run"
+    moved.parent.mkdir()
+    shutil.move(tmp_path / "here" / "run", moved)
+    monkeypatch.setattr(train_mod, "REPLAY_CACHE", 0)
+    replayed = {"n": 0}
+    original = train_mod.ReplayBuffer.get
+
+    def counting_get(self, index):
+        replayed["n"] += 1
+        return original(self, index)
+
+    monkeypatch.setattr(train_mod.ReplayBuffer, "get", counting_get)
+    train_mod.train(tiny_config(), "vgs", moved, progress=False)
+    assert replayed["n"] == 1  # episode 2's replay, its heightmaps rendered afresh
+    assert rows(moved) == rows(full_run[0])
+
+
+@pytest.mark.slow
+def test_re_rendered_replay_heightmaps_equal_the_stored_ones(full_run) -> None:
+    from vgs.grasping.agent import GraspAgent
+    from vgs.grasping.replay import ReplayBuffer
+
+    run, stored = full_run
+    cfg = tiny_config()
+    runner = train_mod.EpisodeRunner(cfg)  # a fresh cell, as on another machine
+    replay = ReplayBuffer(cfg.agent.replay_capacity, render=train_mod.scene_renderer(runner),
+                          cache_size=0)
+    agent = GraspAgent(cfg.network, cfg.agent, seed=cfg.seed)
+    train_mod.load_checkpoint(run / "checkpoint.pt", agent, replay, root_seed=cfg.seed)
+    assert len(replay) == 3 and set(replay.state_dict()["arrays"]) >= {"scene"}
+    assert "color" not in replay.state_dict()["arrays"]  # the checkpoint holds no maps
+    runner.run(train_mod.episode_seed(cfg.seed, 7), lambda hm: train_mod.pixel_command(
+        hm, 32, 32, 0.0))  # the cell has just run an episode: rendering must not care
+    for slot in reversed(range(len(replay))):
+        t = replay.get(slot)
+        color, depth = stored[t.scene]
+        assert t.scene == train_mod.episode_seed(cfg.seed, slot)
+        assert t.color.tobytes() == color.tobytes() and t.depth.tobytes() == depth.tobytes()
 
 
 def test_mode_mismatch_on_resume_is_an_error(tmp_path: Path) -> None:

@@ -8,6 +8,11 @@ A checkpoint file (``checkpoint.pt`` of a training run) is a ZIP archive holding
   with ``torch.load(..., weights_only=True)``, whose unpickler builds tensors and built-in
   containers only and refuses every other object.
 
+Format ``vgs-checkpoint/3`` keeps the replay buffer as scene seeds,
+from which the heightmaps are re-rendered (:mod:`vgs.grasping.replay`); ``vgs-checkpoint/2``
+kept the heightmaps themselves (351 kB a transition). Both are read (:data:`READS`); the
+training loop turns a /2 replay into scene seeds when it resumes one.
+
 So reading a checkpoint never runs code from the file: a file that is not such an archive (an
 older vgs checkpoint, a crafted pickle, a truncated copy) is refused with a
 :class:`vgs.errors.CheckpointError` before anything in it is unpickled. The ZIP's CRCs catch a
@@ -29,7 +34,8 @@ from typing import Any
 from vgs.errors import CheckpointError
 from vgs.jsonsafe import dumps
 
-FORMAT = "vgs-checkpoint/2"
+FORMAT = "vgs-checkpoint/3"
+READS = ("vgs-checkpoint/2", FORMAT)
 META = "meta.json"
 TENSORS = "tensors.pt"
 
@@ -108,9 +114,10 @@ def read_meta(path: Path, verify: bool = True) -> dict[str, Any]:
             meta = json.loads(zf.read(META).decode("utf-8"))
         except (UnicodeDecodeError, json.JSONDecodeError, zipfile.BadZipFile) as exc:
             raise CheckpointError(path, f"has unreadable metadata ({exc})") from None
-    if not isinstance(meta, dict) or meta.get("format") != FORMAT:
+    if not isinstance(meta, dict) or meta.get("format") not in READS:
         found = meta.get("format") if isinstance(meta, dict) else None
-        raise CheckpointError(path, f"has format {found!r}, this vgs reads {FORMAT!r}")
+        raise CheckpointError(path, f"has format {found!r}, this vgs reads "
+                                    f"{' and '.join(map(repr, READS))}")
     return meta
 
 

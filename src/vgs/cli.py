@@ -297,6 +297,9 @@ def cmd_export_policy(args: argparse.Namespace, cfg: ExperimentConfig | None) ->
     print(f"wrote {written.weights} ({written.parameters} values; "
           f"torch.load(path, weights_only=True)) and {written.description}; the plain-torch "
           f"snippet that runs them: docs/grasping.md, 'Using a trained network without vgs'")
+    if written.run_json is not None:
+        print(f"and {written.run_json}: vgs evaluate --policy {written.weights.parent} loads "
+              "the folder without the checkpoint")
     return 0
 
 
@@ -419,7 +422,12 @@ def cmd_report(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
         from vgs.experiments.report import publish
 
         files = publish(Path(args.dir), Path(args.publish))
-        print(f"copied {len(files)} result files (no checkpoints) to {args.publish}")
+        nets = [f for f in files if f.name == "policy.pt"]
+        print(f"copied {len(files)} result files (no checkpoints) to {args.publish}" + (
+            f", with the final networks of {len(nets)} runs "
+            f"({sum(f.stat().st_size for f in nets) / 1e6:.1f} MB: "
+            f"{', '.join(str(f.parent) for f in nets)}; vgs evaluate --policy FOLDER loads "
+            "each)" if nets else ""))
     return 0
 
 
@@ -551,7 +559,9 @@ def build_parser() -> argparse.ArgumentParser:
                                      "weights_only) plus a JSON description")
     export_pol.add_argument("run_dir", metavar="RUN", help="a training run folder")
     export_pol.add_argument("--out", required=True,
-                            help="weights file (.pt); the description goes beside it (.json)")
+                            help="weights file (.pt); the description goes beside it (.json). "
+                                 "A folder (no suffix) gets policy.pt, policy.json and run.json: "
+                                 "a policy folder vgs evaluate --policy loads")
     export_pol.set_defaults(func=cmd_export_policy)
 
     info = sub.add_parser("model-info",
@@ -624,7 +634,8 @@ def build_parser() -> argparse.ArgumentParser:
     report.add_argument("dir", help="a reproduce folder (with eval/<policy>/<condition>/)")
     report.add_argument("--publish", metavar="DEST",
                         help="also copy the small result files (report, figures, tables; no "
-                             "checkpoints) to DEST, e.g. docs/results/quick")
+                             "checkpoints) and each finished run's final network "
+                             "(DEST/<mode>/policy.pt) to DEST, e.g. docs/results/quick")
     report.add_argument("--title", help="the report's title (default: VGS reproduction report)")
     report.set_defaults(func=cmd_report)
 

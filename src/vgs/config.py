@@ -470,14 +470,17 @@ class AgentConfig:
         learning_rate: SGD learning rate (paper: 1e-4).
         momentum: SGD momentum (paper: 0.9).
         weight_decay: L2 weight decay.
-        gamma: Future discount (paper: 0.5).
+        gamma: Future discount (paper: 0.5); unused by vgs train, whose grasps are terminal
+            one-step episodes (target y = R).
         epsilon_start: Initial exploration rate (paper: 0.5).
         epsilon_end: Final exploration rate (paper: 0.1).
         random_episodes: Grasps chosen at random before the greedy phase (paper: 1000).
-        target_update_period: Updates between copies of the evaluation into the target network.
+        target_update_period: Updates between copies of the evaluation into the target network
+            (which vgs train never reads: its target is y = R).
         replay_capacity: Stored transitions.
         replay_batch: Extra prioritised replays per episode.
-        delta_q_threshold: Convergence threshold on Delta Q = |Q_tar - Q_eva| (eq. 10).
+        delta_q_threshold: Convergence threshold on Delta Q = |y - Q_eva| (eq. 10; |R - Q_eva|
+            in training): the largest in the window must be below it.
         delta_q_window: Episodes over which Delta Q must stay under the threshold.
     """
 

@@ -112,3 +112,72 @@ def test_errors() -> None:
         buf.add(bad, 0.0)
     with pytest.raises(ConfigError):
         Transition(np.zeros((3, 3, 3), np.uint8), np.zeros((3, 3), np.float32), (0, 3, 0), 0.0)
+
+
+# -- scene-keyed buffer: seeds in, heightmaps re-rendered -----------------------------------------
+
+
+class Scenes:
+    """A renderer whose maps depend on the seed only, counting its calls."""
+
+    def __init__(self) -> None:
+        self.calls: list[int] = []
+
+    def __call__(self, scene: int) -> tuple[np.ndarray, np.ndarray]:
+        self.calls.append(scene)
+        rng = np.random.default_rng(scene)
+        return (rng.integers(0, 256, (6, 5, 3), dtype=np.uint8),
+                rng.uniform(0, 0.05, (6, 5)).astype(np.float32))
+
+
+def _scene_transition(scene: int, reward: float = 0.0) -> Transition:
+    color, depth = Scenes()(scene)
+    return Transition(color, depth, (scene % 4, scene % 6, scene % 5), reward, scene=scene)
+
+
+def test_a_scene_buffer_keeps_seeds_and_re_renders_the_maps() -> None:
+    render = Scenes()
+    buf = ReplayBuffer(4, render=render, cache_size=2)
+    for s in (10, 11, 12):
+        buf.add(_scene_transition(s, reward=float(s % 2)), 0.1 * s)
+    state = buf.state_dict()
+    assert set(state["arrays"]) == {"scene", "has_next", "action", "reward", "done", "surprise",
+                                    "serial"}
+    assert state["arrays"]["scene"].tolist() == [10, 11, 12]
+    assert render.calls == []  # added maps are cached, never rendered
+    t = buf.get(0)  # scene 10 left the 2-map cache
+    assert render.calls == [10] and (buf.renders, buf.cache_hits) == (1, 0)
+    want = _scene_transition(10, reward=0.0)
+    np.testing.assert_array_equal(t.color, want.color)
+    assert t.depth.tobytes() == want.depth.tobytes()
+    assert (t.action, t.reward, t.done, t.scene) == (want.action, 0.0, True, 10)
+    buf.get(0)
+    buf.get(2)
+    assert render.calls == [10] and buf.cache_hits == 2
+    assert buf.scene(1) == 11 and buf.newest() == 2
+    # a restored buffer holds no maps and renders what it reads
+    other = ReplayBuffer(4, render=Scenes(), cache_size=0)
+    other.load_state_dict(pickle.loads(pickle.dumps(state)))
+    assert other.ranked().tolist() == buf.ranked().tolist()
+    for j in range(3):
+        np.testing.assert_array_equal(other.get(j).color, buf.get(j).color)
+    assert other.render.calls == [10, 11, 12]
+
+
+def test_a_scene_buffer_refuses_what_it_cannot_re_render() -> None:
+    buf = ReplayBuffer(4, render=Scenes())
+    plain = _transition(1)
+    with pytest.raises(ConfigError, match="scene seed"):
+        buf.add(plain, 0.0)
+    with_next = Transition(plain.color, plain.depth, plain.action, 0.0, plain.color,
+                           plain.depth, done=False, scene=3)
+    with pytest.raises(ConfigError, match="next state"):
+        buf.add(with_next, 0.0)
+    maps = ReplayBuffer(4)
+    maps.add(plain, 0.0)
+    with pytest.raises(ConfigError, match="keeps scenes"):
+        buf.load_state_dict(maps.state_dict())
+    with pytest.raises(ConfigError, match="keeps maps"):
+        maps.maps(3)
+    with pytest.raises(ConfigError):
+        ReplayBuffer(4, render=Scenes(), cache_size=-1)

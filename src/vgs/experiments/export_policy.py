@@ -19,6 +19,11 @@
   ``["dense", name, layers]``           ``x = cat(x, run(x, layers))`` (a DenseNet layer)
   ====================================  ==================================================
 
+``vgs export-policy RUN --out FOLDER`` (a path without a file suffix) writes a **policy folder**:
+``FOLDER/policy.pt``, ``FOLDER/policy.json`` and a copy of the run's ``run.json``, which
+``vgs evaluate --policy FOLDER`` and ``vgs heatmap FOLDER`` load without the checkpoint (the
+final networks a published run commits, :mod:`vgs.experiments.policies`).
+
 docs/grasping.md ("Using a trained network without vgs") gives the plain-torch snippet that
 turns a heightmap into the Q maps with them; ``tests/test_export_policy.py`` checks that it
 reproduces vgs's own Q values.
@@ -34,13 +39,13 @@ import torch
 from torch import nn
 
 from vgs.errors import ConfigError
-from vgs.experiments.policies import load_trained_agent
+from vgs.experiments.policies import POLICY_FORMAT, POLICY_WEIGHTS, load_trained_agent
 from vgs.grasping.densenet import _DenseBlock
 from vgs.grasping.network import GraspQNetwork, padded_size
 from vgs.grasping.preprocess import IMAGENET_MEAN, IMAGENET_STD
 from vgs.jsonsafe import dumps
 
-FORMAT = "vgs-grasp-q/1"
+FORMAT = POLICY_FORMAT
 WEIGHT_SUFFIXES = (".pt", ".pth")
 
 
@@ -52,11 +57,13 @@ class PolicyExport:
         weights: The weights file.
         description: The JSON description.
         parameters: Scalar parameters and buffers written.
+        run_json: The copy of the run's ``run.json`` (policy folder), else ``None``.
     """
 
     weights: Path
     description: Path
     parameters: int
+    run_json: Path | None = None
 
 
 def layer_ops(module: nn.Module, prefix: str) -> list[list[Any]]:
@@ -128,17 +135,35 @@ def export_policy(run_dir: Path, out: Path) -> PolicyExport:
     Args:
         run_dir: Training run folder (``run.json``, ``checkpoint.pt``).
         out: Weights file (``.pt`` or ``.pth``); the description goes beside it as ``.json``.
+            A folder (an existing one, or a path without a suffix) becomes a policy folder:
+            ``policy.pt``, ``policy.json`` and a copy of ``run.json``.
 
     Returns:
         The written files.
 
     Raises:
-        ConfigError: ``out`` on another suffix, ``policy`` if the folder holds no run or the
-            network rotates features (not described).
+        ConfigError: ``out`` on another suffix or a folder holding files but not this run's
+            ``run.json``,
+            ``policy`` if the folder holds no run or the network rotates features (not
+            described).
     """
-    if out.suffix.lower() not in WEIGHT_SUFFIXES:
-        raise ConfigError("out", f"{out.name}: the weights file must end in .pt or .pth")
+    from vgs.runfolder import read_json
+
+    folder = out if out.is_dir() or not out.suffix else None
+    if folder is None and out.suffix.lower() not in WEIGHT_SUFFIXES:
+        raise ConfigError("out", f"{out.name}: the weights file must end in .pt or .pth, or "
+                                 "name a folder")
     cfg, meta, agent, episodes = load_trained_agent(run_dir, "cpu", field="policy")
+    if folder is not None:
+        out = folder / POLICY_WEIGHTS
+        theirs = folder / "run.json"
+        if theirs.exists():
+            if theirs.resolve() != (run_dir / "run.json").resolve() and read_json(theirs) != meta:
+                raise ConfigError("out", f"{folder} holds another run's run.json; use a new "
+                                         "folder")
+        elif folder.is_dir() and any(folder.iterdir()):
+            raise ConfigError("out", f"{folder} holds files and no run.json of this run; use a "
+                                     "new folder")
     net: GraspQNetwork = agent.eva_net
     if net.rotate != "input":
         raise ConfigError("policy", f"{run_dir} rotates {net.rotate}; export-policy describes "
@@ -155,4 +180,9 @@ def export_policy(run_dir: Path, out: Path) -> PolicyExport:
     torch.save(weights, out)
     json_path = out.with_suffix(".json")
     json_path.write_text(dumps(description, indent=1))
-    return PolicyExport(out, json_path, description["values"])
+    run_json = None
+    if folder is not None:
+        run_json = folder / "run.json"
+        if run_json.resolve() != (run_dir / "run.json").resolve():
+            run_json.write_bytes((run_dir / "run.json").read_bytes())
+    return PolicyExport(out, json_path, description["values"], run_json)

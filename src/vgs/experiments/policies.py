@@ -7,6 +7,9 @@ A policy spec is one of
   network's R (what the agent does while exploring);
 * a training run folder (``run.json`` and ``checkpoint.pt`` from ``vgs train``): the trained
   evaluation network Q_eva acting greedily, ``argmax_(k,i,j) Q(k, i, j)`` over the peg pixels;
+* a policy folder (``run.json``, ``policy.pt`` and ``policy.json``, as ``vgs export-policy RUN
+  --out FOLDER`` writes it; what a published run commits): the same greedy policy from the
+  final evaluation network alone;
 * ``package.module:function``: a user policy; ``function(cfg)`` must return an
   :class:`EvalPolicy`.
 
@@ -32,6 +35,8 @@ from vgs.grasping.actions import peg_mask, rotation_angle
 from vgs.sim.camera import Heightmap
 
 HEURISTICS = ("center", "random")
+POLICY_FORMAT = "vgs-grasp-q/1"  # policy.json of vgs export-policy
+POLICY_WEIGHTS, POLICY_DESCRIPTION = "policy.pt", "policy.json"
 
 
 @dataclass
@@ -95,14 +100,17 @@ class RandomPolicy:
 
 def load_trained_agent(run_dir: Path, device: str = "cpu", field: str = "policy"
                        ) -> tuple[ExperimentConfig, dict[str, Any], Any, int]:
-    """Configuration, ``run.json``, trained agent and episode count of a ``vgs train`` run.
+    """Configuration, ``run.json``, trained agent and episode count of a ``vgs train`` run, or
+    of a policy folder (``run.json``, ``policy.pt``, ``policy.json``) when the folder holds no
+    checkpoint.
 
     The checkpoint is read pickle-free (:mod:`vgs.checkpoint`): a file that is not a vgs
-    checkpoint is refused before anything in it is unpickled.
+    checkpoint is refused before anything in it is unpickled; ``policy.pt`` is read with
+    ``torch.load(..., weights_only=True)``.
 
     Raises:
-        ConfigError: ``field`` if the folder holds no run (``run.json`` and ``checkpoint.pt``).
-        CorruptFileError: If ``run.json`` cannot be read;
+        ConfigError: ``field`` if the folder holds neither.
+        CorruptFileError: If ``run.json`` cannot be read, or the policy files do not fit it;
             :class:`vgs.errors.CheckpointError` if the checkpoint is refused.
     """
     from vgs.experiments.train import load_checkpoint
@@ -110,16 +118,73 @@ def load_trained_agent(run_dir: Path, device: str = "cpu", field: str = "policy"
     from vgs.runfolder import read_json
 
     meta_path, ckpt = run_dir / "run.json", run_dir / "checkpoint.pt"
-    if not meta_path.exists() or not ckpt.exists():
-        raise ConfigError(field, f"{run_dir} holds no training run (run.json and checkpoint.pt)")
+    weights = run_dir / POLICY_WEIGHTS
+    if not meta_path.exists() or not (ckpt.exists() or weights.exists()):
+        raise ConfigError(field, f"{run_dir} holds no training run (run.json and checkpoint.pt) "
+                                 f"nor a policy folder (run.json and {POLICY_WEIGHTS})")
     meta = read_json(meta_path)
     try:
         run_cfg = from_dict(ExperimentConfig, meta["config"])
     except (KeyError, TypeError, ValueError) as exc:
         raise CorruptFileError(meta_path, f"records no usable configuration ({exc})") from None
     agent = GraspAgent(run_cfg.network, run_cfg.agent, device=device, seed=run_cfg.seed)
-    state = load_checkpoint(ckpt, agent, device=device)
-    return run_cfg, meta, agent, state.episode
+    if ckpt.exists():
+        return run_cfg, meta, agent, load_checkpoint(ckpt, agent, device=device).episode
+    return run_cfg, meta, agent, _load_policy_files(run_dir, meta, agent, device)
+
+
+def _load_policy_files(folder: Path, meta: dict[str, Any], agent: Any, device: str) -> int:
+    """Load ``policy.pt`` into the agent's networks (both: the target network is unused when
+    acting); return the trained episodes ``policy.json`` records.
+
+    Raises:
+        CorruptFileError: If ``policy.json`` is missing, unreadable or of another run, or the
+            weights cannot be read safely or do not fit the network of ``run.json``.
+    """
+    import pickle
+
+    import torch
+
+    from vgs.runfolder import read_json
+
+    desc_path, weights_path = folder / POLICY_DESCRIPTION, folder / POLICY_WEIGHTS
+    if not desc_path.exists():
+        raise CorruptFileError(desc_path, f"is missing beside {POLICY_WEIGHTS}; write both with "
+                                          "vgs export-policy RUN --out FOLDER")
+    desc = read_json(desc_path)
+    episodes = desc.get("trained_episodes")
+    if desc.get("format") != POLICY_FORMAT or not isinstance(episodes, int):
+        raise CorruptFileError(desc_path, f"is not a {POLICY_FORMAT} description with "
+                                          "trained_episodes")
+    for key, mine in (("mode", meta.get("mode")), ("backbone", agent.network_cfg.backbone),
+                      ("num_rotations", agent.num_rotations), ("rotate", agent.rotate)):
+        if desc.get(key) != mine:
+            raise CorruptFileError(desc_path, f"describes a network with {key} "
+                                              f"{desc.get(key)!r}, run.json one with {mine!r}")
+    try:
+        state = torch.load(weights_path, map_location=device, weights_only=True)
+    except (pickle.UnpicklingError, RuntimeError, EOFError, ValueError, TypeError,
+            OSError) as exc:
+        first = " ".join(str(exc).split())[:160]
+        raise CorruptFileError(weights_path, f"holds tensors that cannot be read safely "
+                                             f"({first})") from None
+    own = agent.eva_net.state_dict()
+    needed = {k for k in own if not k.endswith("num_batches_tracked")}
+    if not isinstance(state, dict) or not all(isinstance(v, torch.Tensor)
+                                              for v in state.values()):
+        raise CorruptFileError(weights_path, "is not a dictionary of tensors")
+    wrong = sorted((needed - set(state)) | (set(state) - set(own))) or sorted(
+        k for k in needed if tuple(state[k].shape) != tuple(own[k].shape))
+    if wrong:
+        raise CorruptFileError(weights_path, f"does not fit the network of run.json ("
+                                             f"{len(wrong)} tensors differ, first {wrong[0]})")
+    try:
+        agent.eva_net.load_state_dict(state, strict=False)
+    except RuntimeError as exc:
+        raise CorruptFileError(weights_path, f"does not fit the network of run.json ({exc})") \
+            from None
+    agent.sync_target()
+    return episodes
 
 
 class GreedyPolicy:
@@ -146,7 +211,7 @@ class GreedyPolicy:
 
 
 def is_run_dir(spec: str) -> bool:
-    """Whether ``spec`` names a training run folder."""
+    """Whether ``spec`` names a training run folder or a policy folder (``run.json``)."""
     return (Path(spec) / "run.json").exists()
 
 
@@ -171,7 +236,7 @@ def load_policy(spec: str, cfg: ExperimentConfig, device: str = "cpu") -> EvalPo
             raise ConfigError("policy", f"cannot import {spec!r} ({exc})") from exc
         return factory(cfg)
     raise ConfigError("policy", f"{spec!r} is neither {' nor '.join(HEURISTICS)}, a training "
-                                "run folder (with run.json) nor module:function")
+                                "run or policy folder (with run.json) nor module:function")
 
 
 def policy_label(spec: str) -> str:

@@ -26,6 +26,7 @@ import html
 import json
 import math
 import shutil
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -383,6 +384,14 @@ def _verdict(condition: str, gain: Gain, base: dict[str, Any], vgs: dict[str, An
             f"{success}; std {_f(base['time_std_s'], 2)} vs {_f(vgs['time_std_s'], 2)} s.")
 
 
+ONE_STEP_TARGET = (
+    "Each grasp is a terminal one-step episode (the next peg is placed independently of it), "
+    "so the training target is y = R: gamma and the target network never affect learning, "
+    "Delta Q = |R - Q_eva| of the grasp's own update, and a run counts as delta-Q converged "
+    "when that Delta Q stayed below `agent.delta_q_threshold` in each of its last "
+    "`agent.delta_q_window` episodes (the window's maximum, not its mean).")
+
+
 def _training_rows(out: Path) -> list[list[str]]:
     rows = []
     for run in sorted((out / "train").glob("*")):
@@ -513,6 +522,7 @@ def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
     runs = [r for r in sorted((out / "train").glob("*")) if (r / "episodes.csv").exists()]
     if runs:
         doc.h(2, "Training")
+        doc.p(ONE_STEP_TARGET)
         doc.table(["run", "episodes", "grasp success", "assembly success (last 20 %)",
                    "mean |offset| last 20 % [mm]", "threshold [s]", "delta-Q converged"],
                   _training_rows(out))
@@ -548,6 +558,7 @@ def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
     return out / "report.md"
 
 
+PUBLISH_POLICY_LIMIT = 10_000_000  # bytes: final networks a published run commits (light backbone)
 PUBLISHED = ("reproduce.json", "report.md", "report.html", "results.csv", "figures/*.png",
              "eval/*/*/episodes.parquet", "eval/*/*/episodes.csv", "eval/*/*/summary.json",
              "train/*/episodes.csv", "train/*/run.json", "train/*/threshold.json",
@@ -556,13 +567,19 @@ PUBLISHED = ("reproduce.json", "report.md", "report.html", "results.csv", "figur
 
 def publish(out: Path, dest: Path) -> list[Path]:
     """Copy the small result files of a reproduction (no checkpoints, no TensorBoard logs, no
-    journals) from ``out`` to ``dest`` (e.g. ``docs/results/quick``), keeping the layout.
+    journals) from ``out`` to ``dest`` (e.g. ``docs/results/quick``), keeping the layout, and
+    the final networks of each finished training run as a policy folder ``dest/<mode>/``
+    (``dest/<run>/`` when a mode has several runs): ``policy.pt``, ``policy.json`` and
+    ``run.json``, which ``vgs evaluate --policy dest/<mode>`` loads on a fresh clone
+    (:func:`vgs.experiments.export_policy.export_policy`). Networks over
+    ``PUBLISH_POLICY_LIMIT`` (a DenseNet-121 policy) are not published, with a warning.
 
     Returns:
         The copied files.
 
     Raises:
-        ConfigError: If ``out`` holds no report.
+        ConfigError: If ``out`` holds no report, or a policy folder in ``dest`` holds another
+            run.
     """
     if not (out / "report.md").exists():
         raise ConfigError("report", f"{out} holds no report.md; run vgs report first")
@@ -574,4 +591,26 @@ def publish(out: Path, dest: Path) -> list[Path]:
                 target.parent.mkdir(parents=True, exist_ok=True)
                 shutil.copy2(src, target)
                 copied.append(target)
+    finished = [run for run in sorted((out / "train").glob("*"))
+                if (run / "checkpoint.pt").exists() and (run / "convergence.json").exists()]
+    if finished:
+        from vgs.experiments.export_policy import export_policy
+
+        modes = [str(read_json(run / "run.json").get("mode")) for run in finished]
+        for run, mode in zip(finished, modes, strict=True):
+            folder = dest / (mode if modes.count(mode) == 1 else run.name)
+            written = export_policy(run, folder)
+            files = [written.weights, written.description, folder / "run.json"]
+            size = written.weights.stat().st_size
+            if size > PUBLISH_POLICY_LIMIT:
+                # A DenseNet-121 policy (about 57 MB) is too large to commit: users train it.
+                for f in files:
+                    f.unlink(missing_ok=True)
+                if folder.exists() and not any(folder.iterdir()):
+                    folder.rmdir()
+                warnings.warn(f"{run.name}: its final networks take {size / 1e6:.0f} MB, over "
+                              f"the {PUBLISH_POLICY_LIMIT / 1e6:.0f} MB a published run commits; "
+                              "not published", stacklevel=2)
+                continue
+            copied += files
     return copied

@@ -22,15 +22,24 @@ Threshold: ``reward.threshold_s`` if given; otherwise, during the random-explora
 running ``threshold_percentile`` of the successful assembly times seen so far, frozen at the end
 of that phase and written to ``threshold.json``.
 
-Resume: a run started again with the same ``--out`` compares the request with ``run.json``
-(any difference but a larger ``train.episodes`` is refused, naming the field), loads
-``checkpoint.pt`` (both networks, optimiser, replay, RNG states, threshold, episode counter;
-pickle-free, :mod:`vgs.checkpoint`), checks the rows of ``episodes.csv`` against the plan (episode
-numbers and seeds), drops the rows written after that checkpoint, and continues. A larger
-``train.episodes`` extends the run: the epsilon schedule stays the one of the first request
-(``schedule_episodes`` in ``run.json``), so the episodes already run keep their meaning and the
-extra ones act at the final epsilon. The folder is locked (:func:`vgs.runfolder.locked`) while
-the run works.
+Replay: the buffer keeps each transition's scene seed (the episode's seed; the peg is the
+configured one), action, reward and surprise, and re-renders the heightmaps of a replayed
+transition with ``runner.observe(seed)``, the path that produced them (reset with
+``default_rng(seed)``, ray-cast capture without noise): bit-identical maps, so a checkpoint of
+5000 transitions holds 0.3 MB of replay instead of 1.75 GB of maps. The newest transition's
+maps are hashed into the checkpoint and re-rendered on resume; a host that renders them
+differently is refused.
+
+Resume: a run started again with the same ``--out`` (or the folder moved elsewhere) compares
+the request with ``run.json`` (any difference but a larger ``train.episodes`` is refused, naming
+the field), loads ``checkpoint.pt`` (both networks, optimiser, replay, RNG states, threshold,
+episode counter; pickle-free, :mod:`vgs.checkpoint`; the heightmap replay of a
+``vgs-checkpoint/2`` file is turned into scene seeds), checks the rows of ``episodes.csv``
+against the plan (episode numbers and seeds), drops the rows written after that checkpoint,
+and continues. A larger ``train.episodes`` extends the run: the epsilon schedule stays the one
+of the first request (``schedule_episodes`` in ``run.json``), so the episodes already run keep
+their meaning and the extra ones act at the final epsilon. The folder is locked
+(:func:`vgs.runfolder.locked`) while the run works.
 """
 
 from __future__ import annotations
@@ -65,7 +74,7 @@ from vgs.errors import (
 from vgs.experiments.policies import pixel_command
 from vgs.grasping.agent import DeltaQMonitor, GraspAction, GraspAgent
 from vgs.grasping.preprocess import peg_mask
-from vgs.grasping.replay import ReplayBuffer, Transition
+from vgs.grasping.replay import DEFAULT_CACHE, Renderer, ReplayBuffer, Transition, maps_digest
 from vgs.grasping.rewards import MODES, episode_reward, next_threshold
 from vgs.runfolder import check_request, host, locked, read_json, write_json
 from vgs.sim.camera import Heightmap
@@ -82,9 +91,22 @@ RECORD_COLUMNS = ("grasp_success", "grasp_offset_mm", "assembly_success", "assem
                   "adjustments", "failure_reason")  # from EpisodeRecord.to_row()
 
 
+REPLAY_CACHE = DEFAULT_CACHE  # re-rendered replay heightmaps kept in memory
+
+
 def episode_seed(root: int, episode: int) -> int:
     """Seed of one episode from (root seed, episode index)."""
     return int(np.random.SeedSequence([root, episode]).generate_state(1)[0])
+
+
+def scene_renderer(runner: EpisodeRunner) -> Renderer:
+    """The replay's renderer: the heightmaps a training episode of that seed observed."""
+
+    def render(seed: int) -> tuple[np.ndarray, np.ndarray]:
+        hm = runner.observe(seed)
+        return hm.color, hm.depth
+
+    return render
 
 
 def action_to_command(action: GraspAction, hm: Heightmap) -> GraspCommand:
@@ -230,16 +252,57 @@ def save_checkpoint(path: Path, agent: GraspAgent, replay: ReplayBuffer, state: 
             "exploration_times": state.exploration_times, "rng_state": state.rng_state,
             "monitor": monitor.state_dict(), "agent": agent_state, "replay": replay_state,
             "table_sha256": state.table_sha256}
+    newest = replay.newest()
+    if replay.keeps_scenes and newest is not None:  # checked on resume (module docstring)
+        scene = replay.scene(newest)
+        meta["replay_check"] = {"scene": scene, "sha256": maps_digest(*replay.maps(scene))}
     checkpoint.save(path, tensors, meta)
 
 
+def _scenes_from_maps(path: Path, arrays: dict[str, Any], replay: ReplayBuffer,
+                      root_seed: int | None) -> dict[str, Any]:
+    """The replay arrays of a checkpoint that kept heightmaps (``vgs-checkpoint/2``) as scene
+    seeds: the training loop adds one transition per episode, so a transition's serial is its
+    episode and its scene is ``episode_seed(root_seed, serial)``. The oldest, a middle and the
+    newest transition are re-rendered and must equal the stored maps bit for bit.
+
+    Raises:
+        CheckpointError: If the stored maps are not those this host renders for the scenes.
+    """
+    common = {k: v for k, v in arrays.items()
+              if k not in ("color", "depth", "next_color", "next_depth")}
+    if arrays["color"] is None:
+        return {"scene": None, **common}
+    if root_seed is None or arrays["next_color"] is not None or arrays["has_next"].any():
+        raise CheckpointError(path, "holds a replay of heightmaps that cannot be turned into "
+                                    "scene seeds; train again into a new folder")
+    serials = arrays["serial"].astype(np.int64)
+    scenes = np.array([episode_seed(root_seed, int(e)) for e in serials], np.int64)
+    order = np.argsort(serials, kind="stable")
+    for slot in sorted({int(order[0]), int(order[len(order) // 2]), int(order[-1])}):
+        color, depth = replay.render(int(scenes[slot]))
+        if not (np.array_equal(color, arrays["color"][slot])
+                and np.array_equal(np.asarray(depth, np.float32), arrays["depth"][slot])):
+            raise CheckpointError(path, f"holds replay heightmaps (vgs-checkpoint/2) that differ "
+                                        f"from those this host renders for their scenes "
+                                        f"(episode {int(serials[slot])}); finish the run with "
+                                        "the vgs that wrote it or train again into a new folder")
+    return {"scene": scenes, **common}
+
+
 def load_checkpoint(path: Path, agent: GraspAgent, replay: ReplayBuffer | None = None,
-                    monitor: DeltaQMonitor | None = None, device: str = "cpu") -> TrainState:
+                    monitor: DeltaQMonitor | None = None, device: str = "cpu",
+                    root_seed: int | None = None) -> TrainState:
     """Restore a :func:`save_checkpoint` file into ``agent`` (and ``replay``, ``monitor``, the
     torch RNG when given); return the counters.
 
+    A scene-keyed ``replay`` re-renders the newest transition's maps and compares them with
+    the hash the checkpoint recorded; one from a checkpoint that kept heightmaps is turned into
+    scene seeds with ``root_seed`` (:func:`_scenes_from_maps`).
+
     Raises:
-        CheckpointError: If the file is not a vgs checkpoint, is damaged, or does not fit.
+        CheckpointError: If the file is not a vgs checkpoint, is damaged, or does not fit, or
+            this host renders the replay's scenes differently from the host that wrote it.
     """
     tensors, meta = checkpoint.load(path, map_location=device)
     try:
@@ -249,7 +312,17 @@ def load_checkpoint(path: Path, agent: GraspAgent, replay: ReplayBuffer | None =
         if replay is not None:
             arrays = {k: None if v is None else v.cpu().numpy()
                       for k, v in tensors["replay_arrays"].items()}
+            if replay.keeps_scenes and "scene" not in arrays and "color" in arrays:
+                arrays = _scenes_from_maps(path, arrays, replay, root_seed)
             replay.load_state_dict({**meta["replay"], "arrays": arrays})
+            check = meta.get("replay_check")
+            if replay.keeps_scenes and check is not None and replay.render is not None:
+                if maps_digest(*replay.render(int(check["scene"]))) != check["sha256"]:
+                    raise CheckpointError(path, f"re-renders its replay heightmaps differently "
+                                                f"on this host (scene {check['scene']}), whose "
+                                                "MuJoCo, NumPy or vgs differs from the writer's; "
+                                                "resume it where it was written, or train again "
+                                                "into a new folder")
         if monitor is not None:
             monitor.load_state_dict(meta["monitor"])
             torch.set_rng_state(tensors["torch_rng"].cpu())
@@ -336,13 +409,15 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
     torch.set_num_threads(threads or max(1, min(4, os.cpu_count() or 1)))
     agent = GraspAgent(cfg.network, cfg.agent, device=device, seed=cfg.seed)
     schedule, new_meta = _check_start(cfg, mode, out)
-    replay = ReplayBuffer(cfg.agent.replay_capacity)
+    runner = EpisodeRunner(cfg)
+    replay = ReplayBuffer(cfg.agent.replay_capacity, render=scene_renderer(runner),
+                          cache_size=REPLAY_CACHE)
     monitor = DeltaQMonitor.from_config(cfg.agent)
     state = TrainState(exploration_times=[])
     rng = np.random.default_rng([cfg.seed, 7])
     ckpt = out / "checkpoint.pt"
     if ckpt.exists():
-        state = load_checkpoint(ckpt, agent, replay, monitor, device)
+        state = load_checkpoint(ckpt, agent, replay, monitor, device, root_seed=cfg.seed)
         try:
             rng.bit_generator.state = state.rng_state
         except (TypeError, ValueError, KeyError) as exc:
@@ -360,7 +435,6 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
 
     writer = SummaryWriter(str(out / "tensorboard"), purge_step=state.episode)
     csv_file, table = _open_csv(out / "episodes.csv", rows)
-    runner = EpisodeRunner(cfg)
     bar = tqdm(range(state.episode, total), initial=state.episode, total=total,
                desc=f"train {mode}", disable=not progress, dynamic_ncols=True,
                 position=position)
@@ -423,7 +497,8 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
             reward = r_grasp + r_asm
 
             # Learning: the executed pixel, then prioritised replays.
-            transition = Transition(hm.color, hm.depth, action.action, reward, done=True)
+            transition = Transition(hm.color, hm.depth, action.action, reward, done=True,
+                                    scene=seed)
             stats = agent.update(transition)
             replay.add(transition, stats["delta_q"])
             agent.replay_update(replay, rng)
@@ -490,5 +565,5 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
     write_json(out / "convergence.json",
                {"delta_q_threshold": cfg.agent.delta_q_threshold,
                 "window": cfg.agent.delta_q_window, "converged": bool(monitor.converged),
-                "delta_q_window_mean": monitor.mean})
+                "delta_q_window_mean": monitor.mean, "delta_q_window_max": monitor.max})
     return out

@@ -180,6 +180,11 @@ class DeltaQMonitor:
         """Mean Delta Q over the current window (NaN when empty)."""
         return float(np.mean(self._values)) if self._values else math.nan
 
+    @property
+    def max(self) -> float:
+        """Largest Delta Q in the current window (NaN when empty): the convergence rule's."""
+        return float(max(self._values)) if self._values else math.nan
+
     def state_dict(self) -> dict[str, Any]:
         """Picklable state."""
         return {"threshold": self.threshold, "window": self.window, "values": list(self._values)}

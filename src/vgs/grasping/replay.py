@@ -17,13 +17,26 @@ is insensitive to the scale of the rewards. After a replay, the caller writes th
 back with :meth:`ReplayBuffer.update_surprise`.
 
 The buffer has a fixed capacity; when it is full a new transition overwrites the oldest one
-(ring buffer). Arrays are allocated on the first insertion; the next-state arrays only when a
-first transition with a next state arrives. Memory per transition for a 224 x 224 heightmap:
-150,528 B colour + 200,704 B depth = 351 kB, twice that with a next state.
+(ring buffer). It keeps transitions in one of two ways:
+
+* **maps** (default): the heightmaps themselves. Arrays are allocated on the first insertion;
+  the next-state arrays only when a first transition with a next state arrives. A 224 x 224
+  transition takes 150,528 B colour + 200,704 B depth = 351 kB, twice that with a next state.
+* **scenes** (``render`` given): only what re-creates the heightmaps, the scene seed of each
+  transition (:attr:`Transition.scene`), with its action, reward, done flag, surprise and
+  insertion serial: 58 B a transition. :meth:`ReplayBuffer.get` re-renders the maps with
+  ``render(scene)``, which must give bit-identical maps for a seed (the training loop passes
+  the observation path that produced them, :meth:`vgs.assembly.episode.EpisodeRunner.observe`).
+  The last ``cache_size`` maps used (added or re-rendered) stay in memory (least recently used
+  out first), so a transition replayed again soon is not rendered twice. Terminal transitions
+  only: a next state would need its own scene.
 """
 
 from __future__ import annotations
 
+import hashlib
+from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -44,6 +57,8 @@ class Transition:
         next_color: RGB heightmap of s', or ``None`` when no next state is stored.
         next_depth: Height map of s' [m], or ``None``.
         done: True if s is terminal for bootstrapping: the TD target is then y = r.
+        scene: Seed of the scene the maps of s were rendered from, or ``None``; a
+            scene-keyed :class:`ReplayBuffer` stores this instead of the maps.
     """
 
     color: np.ndarray
@@ -53,6 +68,7 @@ class Transition:
     next_color: np.ndarray | None = None
     next_depth: np.ndarray | None = None
     done: bool = True
+    scene: int | None = None
 
     def __post_init__(self) -> None:
         if self.color.dtype != np.uint8 or self.color.ndim != 3 or self.color.shape[2] != 3:
@@ -80,8 +96,24 @@ class Transition:
         return self.next_color is not None
 
 
-_ARRAYS = ("color", "depth", "next_color", "next_depth", "has_next", "action", "reward", "done",
-           "surprise", "serial")
+_COMMON = ("has_next", "action", "reward", "done", "surprise", "serial")
+_MAP_ARRAYS = ("color", "depth", "next_color", "next_depth", *_COMMON)
+_SCENE_ARRAYS = ("scene", *_COMMON)
+
+Renderer = Callable[[int], tuple[np.ndarray, np.ndarray]]
+"""``render(scene) -> (color, depth)``: the heightmaps of a scene seed, bit-identical each time."""
+
+DEFAULT_CACHE = 32  # re-rendered maps kept by a scene-keyed buffer (11 MB at 224 x 224)
+
+
+def maps_digest(color: np.ndarray, depth: np.ndarray) -> str:
+    """SHA-256 of a pair of heightmaps (shapes, dtypes and bytes)."""
+    h = hashlib.sha256()
+    for a in (color, depth):
+        a = np.ascontiguousarray(a)
+        h.update(f"{a.dtype.str}{a.shape}".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
 
 
 class ReplayBuffer:
@@ -90,31 +122,54 @@ class ReplayBuffer:
     Args:
         capacity: Largest number of stored transitions (``agent.replay_capacity``).
         power: Exponent a of the power law over surprise ranks (VPG: 2); a = 1 is uniform.
+        render: Keep scene seeds instead of heightmaps and re-render the maps of a scene with
+            this function when a transition is read (module docstring); ``None`` keeps maps.
+        cache_size: Re-rendered maps kept in memory by a scene-keyed buffer (0: none).
 
     Raises:
-        ConfigError: On a capacity < 1 or a power <= 0.
+        ConfigError: On a capacity < 1, a power <= 0 or a negative cache size.
     """
 
-    def __init__(self, capacity: int, power: float = 2.0) -> None:
+    def __init__(self, capacity: int, power: float = 2.0, render: Renderer | None = None,
+                 cache_size: int = DEFAULT_CACHE) -> None:
         if capacity < 1:
             raise ConfigError("agent.replay_capacity", f"must be >= 1, got {capacity}")
         if not (np.isfinite(power) and power > 0):
             raise ConfigError("replay.power", f"must be > 0, got {power!r}")
+        if cache_size < 0:
+            raise ConfigError("replay.cache_size", f"must be >= 0, got {cache_size}")
         self.capacity = int(capacity)
         self.power = float(power)
+        self.render = render
+        self.cache_size = int(cache_size)
+        self._cache: OrderedDict[int, tuple[np.ndarray, np.ndarray]] = OrderedDict()
+        self.renders = 0  # maps rendered by get() (cache misses)
+        self.cache_hits = 0
         self._size = 0
         self._cursor = 0
         self._count = 0
-        self._a: dict[str, np.ndarray | None] = dict.fromkeys(_ARRAYS)
+        self._a: dict[str, np.ndarray | None] = dict.fromkeys(self._names)
+
+    @property
+    def keeps_scenes(self) -> bool:
+        """True if the buffer keeps scene seeds and re-renders the maps."""
+        return self.render is not None
+
+    @property
+    def _names(self) -> tuple[str, ...]:
+        return _SCENE_ARRAYS if self.keeps_scenes else _MAP_ARRAYS
 
     def __len__(self) -> int:
         return self._size
 
     def _allocate(self, t: Transition) -> None:
         n = self.capacity
+        if self.keeps_scenes:
+            self._a["scene"] = np.zeros(n, np.int64)
+        else:
+            self._a.update(color=np.zeros((n, *t.color.shape), np.uint8),
+                           depth=np.zeros((n, *t.depth.shape), np.float32))
         self._a.update(
-            color=np.zeros((n, *t.color.shape), np.uint8),
-            depth=np.zeros((n, *t.depth.shape), np.float32),
             has_next=np.zeros(n, bool),
             action=np.zeros((n, 3), np.int64),
             reward=np.zeros(n, np.float64),
@@ -126,12 +181,23 @@ class ReplayBuffer:
     def add(self, transition: Transition, surprise: float) -> int:
         """Store a transition with its surprise |TD error|; returns its slot index.
 
+        A scene-keyed buffer keeps the transition's scene seed, and its maps in the cache.
+
         Raises:
             ConfigError: If the heightmap size differs from the stored ones or the surprise is
-                negative or not finite.
+                negative or not finite; for a scene-keyed buffer, if the transition has no
+                scene seed or has a next state.
         """
         if not (np.isfinite(surprise) and surprise >= 0):
             raise ConfigError("replay.surprise", f"must be a finite value >= 0, got {surprise!r}")
+        if self.keeps_scenes:
+            if transition.scene is None:
+                raise ConfigError("replay.transition", "has no scene seed; a scene-keyed buffer "
+                                                       "re-renders the maps from it")
+            if transition.has_next:
+                raise ConfigError("replay.transition", "has a next state; a scene-keyed buffer "
+                                                       "keeps terminal transitions only")
+            return self._add_scene(transition, surprise)
         a = self._a
         if a["color"] is None:
             self._allocate(transition)
@@ -151,6 +217,20 @@ class ReplayBuffer:
         if transition.has_next:
             a["next_color"][i] = transition.next_color
             a["next_depth"][i] = transition.next_depth
+        return self._add_common(transition, surprise)
+
+    def _add_scene(self, transition: Transition, surprise: float) -> int:
+        if self._a["scene"] is None:
+            self._allocate(transition)
+        i = self._cursor
+        self._a["scene"][i] = int(transition.scene)
+        self._a["has_next"][i] = False
+        self._remember(int(transition.scene), transition.color, transition.depth)
+        return self._add_common(transition, surprise)
+
+    def _add_common(self, transition: Transition, surprise: float) -> int:
+        a = self._a
+        i = self._cursor
         a["action"][i] = [int(v) for v in transition.action]
         a["reward"][i] = transition.reward
         a["done"][i] = transition.done
@@ -161,14 +241,73 @@ class ReplayBuffer:
         self._size = min(self._size + 1, self.capacity)
         return i
 
+    def _remember(self, scene: int, color: np.ndarray, depth: np.ndarray) -> None:
+        if self.cache_size == 0:
+            return
+        self._cache[scene] = (np.array(color, copy=True), np.array(depth, copy=True))
+        self._cache.move_to_end(scene)
+        while len(self._cache) > self.cache_size:
+            self._cache.popitem(last=False)
+
+    def maps(self, scene: int) -> tuple[np.ndarray, np.ndarray]:
+        """The heightmaps of a scene seed (scene-keyed buffer): from the cache, else rendered.
+
+        Returns:
+            Copies ``(color, depth)``.
+
+        Raises:
+            ConfigError: If the buffer keeps maps, or the renderer gives something other than
+                uint8 (H, W, 3) colour and (H, W) depth.
+        """
+        if self.render is None:
+            raise ConfigError("replay.render", "this buffer keeps maps, not scenes")
+        scene = int(scene)
+        if scene in self._cache:
+            self.cache_hits += 1
+            self._cache.move_to_end(scene)
+            color, depth = self._cache[scene]
+        else:
+            self.renders += 1
+            color, depth = self.render(scene)
+            color = np.asarray(color)
+            depth = np.asarray(depth, dtype=np.float32)
+            if color.dtype != np.uint8 or color.ndim != 3 or depth.shape != color.shape[:2]:
+                raise ConfigError("replay.render", f"scene {scene} rendered as {color.dtype} "
+                                                   f"{color.shape} and {depth.shape}")
+            self._remember(scene, color, depth)
+        return color.copy(), depth.copy()
+
+    def scene(self, index: int) -> int:
+        """Scene seed of slot ``index`` (scene-keyed buffer).
+
+        Raises:
+            ConfigError: If the slot is empty or the buffer keeps maps.
+        """
+        self._check_index(index)
+        if not self.keeps_scenes:
+            raise ConfigError("replay.scene", "this buffer keeps maps, not scenes")
+        return int(self._a["scene"][index])
+
+    def newest(self) -> int | None:
+        """Slot of the most recently added transition, or ``None`` when empty."""
+        return None if self._size == 0 else (self._cursor - 1) % self.capacity
+
     def get(self, index: int) -> Transition:
-        """The transition in slot ``index`` (copies of the stored arrays).
+        """The transition in slot ``index`` (copies of the stored arrays; a scene-keyed buffer
+        re-renders its maps, or takes them from the cache).
 
         Raises:
             ConfigError: If the slot is empty.
         """
         self._check_index(index)
         a = self._a
+        if self.keeps_scenes:
+            scene = int(a["scene"][index])
+            color, depth = self.maps(scene)
+            return Transition(color=color, depth=depth,
+                              action=tuple(int(v) for v in a["action"][index]),
+                              reward=float(a["reward"][index]), done=bool(a["done"][index]),
+                              scene=scene)
         has_next = bool(a["has_next"][index])
         return Transition(
             color=a["color"][index].copy(),
@@ -252,7 +391,10 @@ class ReplayBuffer:
         return upper - lower
 
     def state_dict(self) -> dict[str, Any]:
-        """Picklable state: scalars and numpy arrays of the occupied slots (views, not copies)."""
+        """Picklable state: scalars and numpy arrays of the occupied slots (views, not copies).
+
+        The arrays of a scene-keyed buffer are ``scene`` and the per-transition scalars (no
+        maps, no cache); those of a map buffer hold the maps."""
         n = self._size
         arrays = {k: (None if v is None else v[:n]) for k, v in self._a.items()}
         return {
@@ -265,10 +407,10 @@ class ReplayBuffer:
         }
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
-        """Restore a :meth:`state_dict` (same capacity).
+        """Restore a :meth:`state_dict` (same capacity, same kind: scenes or maps).
 
         Raises:
-            ConfigError: On a capacity mismatch or missing entries.
+            ConfigError: On a capacity mismatch, missing entries or the other kind's arrays.
         """
         missing = {"capacity", "power", "size", "cursor", "count", "arrays"} - set(state)
         if missing:
@@ -280,12 +422,16 @@ class ReplayBuffer:
             )
         size = int(state["size"])
         arrays = state["arrays"]
-        if set(arrays) != set(_ARRAYS):
-            raise ConfigError("replay.state", f"array names {sorted(arrays)} != {list(_ARRAYS)}")
+        names = self._names
+        if set(arrays) != set(names):
+            kind = "scenes" if self.keeps_scenes else "maps"
+            raise ConfigError("replay.state", f"array names {sorted(arrays)} != {list(names)} "
+                                              f"(this buffer keeps {kind})")
         self.power = float(state["power"])
         self._size, self._cursor, self._count = size, int(state["cursor"]), int(state["count"])
-        self._a = dict.fromkeys(_ARRAYS)
-        if arrays["color"] is None:
+        self._a = dict.fromkeys(names)
+        self._cache.clear()
+        if arrays[names[0]] is None:
             return
         for name, value in arrays.items():
             if value is None:
@@ -298,4 +444,4 @@ class ReplayBuffer:
             self._a[name] = full
 
 
-__all__ = ["ReplayBuffer", "Transition"]
+__all__ = ["DEFAULT_CACHE", "ReplayBuffer", "Renderer", "Transition", "maps_digest"]
