@@ -30,9 +30,9 @@ def test_the_tables_use_their_published_convention() -> None:
     from vgs.experiments.sweep import summarize as sweep_summary
 
     times = [10.0, 14.0, 12.0]
-    df = pd.DataFrame({"success": True, "grasp_success": True, "assembly_time": times,
+    df = pd.DataFrame({"assembly_success": True, "grasp_success": True, "assembly_time_s": times,
                        "grasp_offset_mm": 0.0, "failure_reason": ""})
     assert evaluation_summary(df)["time_std_s"] == pytest.approx(2.0)
-    rows = [{"offset_mm": 0.0, "success": True, "assembly_time_s": t, "time_align_s": 1.0,
+    rows = [{"offset_mm": 0.0, "assembly_success": True, "assembly_time_s": t, "time_align_s": 1.0,
              "adjustments": 0, "failure_reason": ""} for t in times]
     assert sweep_summary(rows)[0]["time_std_s"] == pytest.approx(math.sqrt(8 / 3))
