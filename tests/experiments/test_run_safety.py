@@ -89,7 +89,7 @@ def _run_folder(folder: Path, mode: str, checkpoint_bytes: bytes, finished: bool
                                                  "schedule_episodes": 6}))
     (folder / "checkpoint.pt").write_bytes(checkpoint_bytes)
     if finished:
-        from vgs.experiments.train import CSV_COLUMNS, episode_seed
+        from vgs.experiments.trainfolder import CSV_COLUMNS, episode_seed
 
         with (folder / "episodes.csv").open("w", newline="") as fh:
             writer = csv.DictWriter(fh, fieldnames=CSV_COLUMNS)
