@@ -60,7 +60,7 @@ def cmd_report(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     path = build_report(Path(args.dir), **({"title": args.title} if args.title else {}))
     print(f"wrote {path} and {path.with_suffix('.html')}")
     if args.publish:
-        from vgs.experiments.report import publish
+        from vgs.experiments.publish import publish
 
         files = publish(Path(args.dir), Path(args.publish))
         nets = [f for f in files if f.name == "policy.pt"]
