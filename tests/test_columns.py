@@ -285,9 +285,10 @@ def test_an_evaluation_started_before_the_vocabulary_resumes(
     """A journal of legacy rows (old names and units, bare NaN, the old checksum) resumed by
     this vgs gives the table an uninterrupted run writes (physics-free stand-in)."""
     from experiments import fakes
+    from vgs.experiments import episodepool
     from vgs.experiments import evaluate as evaluate_mod
 
-    monkeypatch.setattr(evaluate_mod, "EpisodeRunner", fakes.FakeRunner)
+    monkeypatch.setattr(episodepool, "EpisodeRunner", fakes.FakeRunner)
     cfg = fakes.tiny_config()
     spec = EvalSpec("random", "length", 4, seed=2)
     reference = evaluate_mod.evaluate(cfg, spec, tmp_path / "ref", workers=1, progress=False)
