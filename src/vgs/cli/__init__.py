@@ -20,43 +20,17 @@ configuration from the flags), :mod:`vgs.cli.runs` (the commands that run someth
 :mod:`vgs.cli.folders` (the commands that read run folders); ``python -m vgs.cli`` runs it.
 """
 
-from vgs.cli.folders import (
-    cmd_curves,
-    cmd_export_policy,
-    cmd_heatmap,
-    cmd_report,
-    cmd_seeds,
-    cmd_status,
-)
 from vgs.cli.options import (
     OVERRIDE_FLAGS,
     UsageError,
     apply_override,
     check_hole_fits,
-    check_video_name,
     config_from_args,
-    flag_overrides,
-    headless_gl_default,
     parse_value,
-    seed_arg,
 )
 from vgs.cli.parser import RESUMABLE, build_parser, main
-from vgs.cli.runs import (
-    cmd_config,
-    cmd_demo,
-    cmd_evaluate,
-    cmd_export_scene,
-    cmd_model_info,
-    cmd_reproduce,
-    cmd_sweep,
-    cmd_train,
-)
 
 __all__ = [
     "OVERRIDE_FLAGS", "RESUMABLE", "UsageError", "apply_override", "build_parser",
-    "check_hole_fits", "check_video_name", "cmd_config", "cmd_curves", "cmd_demo",
-    "cmd_evaluate", "cmd_export_policy", "cmd_export_scene", "cmd_heatmap", "cmd_model_info",
-    "cmd_report", "cmd_reproduce", "cmd_seeds", "cmd_status", "cmd_sweep", "cmd_train",
-    "config_from_args", "flag_overrides", "headless_gl_default", "main", "parse_value",
-    "seed_arg",
+    "check_hole_fits", "config_from_args", "main", "parse_value",
 ]
