@@ -1,12 +1,15 @@
-"""What a training run keeps in its folder besides ``run.json``: the episode table
-(``episodes.csv``, checked row by row on resume) and the checkpoint (networks, optimiser, replay,
-RNG states and counters; pickle-free, :mod:`vgs.checkpoint`). :mod:`vgs.experiments.train` writes
-both; :func:`load_checkpoint` also serves the policies that load a trained agent."""
+"""What a training run keeps in its folder: ``run.json`` (the request, checked on resume by
+:func:`check_start`), the episode table (``episodes.csv``, checked row by row on resume) and the
+checkpoint (networks, optimiser, replay, RNG states and counters; pickle-free,
+:mod:`vgs.checkpoint`). :mod:`vgs.experiments.train` writes them; :func:`load_checkpoint` also
+serves the policies that load a trained agent."""
 
 from __future__ import annotations
 
 import csv
 import os
+import subprocess
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -15,14 +18,11 @@ import numpy as np
 import torch
 
 from vgs import checkpoint
-from vgs.config import ExperimentConfig
-from vgs.errors import (
-    CheckpointError,
-    ConfigError,
-    CorruptFileError,
-)
+from vgs.config import ExperimentConfig, to_dict
+from vgs.errors import CheckpointError, ConfigError, CorruptFileError, RunMismatchError
 from vgs.grasping.agent import DeltaQMonitor, GraspAgent
 from vgs.grasping.replay import ReplayBuffer, maps_digest
+from vgs.runfolder import check_request, host, read_json
 
 # Column vocabulary of vgs.columns; booleans are written True/False (0/1 before 2026-12).
 CSV_COLUMNS = (
@@ -223,3 +223,48 @@ def load_checkpoint(path: Path, agent: GraspAgent, replay: ReplayBuffer | None =
         raise CheckpointError(path, f"does not fit this run ({exc})") from None
     except (KeyError, TypeError, ValueError, AttributeError, RuntimeError) as exc:
         raise CheckpointError(path, f"is incomplete ({type(exc).__name__}: {exc})") from None
+
+
+def git_revision() -> str:
+    try:
+        out = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True,
+                             cwd=Path(__file__).resolve().parent, timeout=5)
+        return out.stdout.strip() or "unknown"
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+
+
+def check_start(cfg: ExperimentConfig, mode: str, out: Path
+                 ) -> tuple[int, dict[str, Any] | None]:
+    """Check the request against ``run.json`` without writing anything.
+
+    Returns:
+        The number of episodes the epsilon schedule spans, and the ``run.json`` to write once
+        the rest of the folder has been checked (None when it stays as it is).
+    """
+    meta_path = out / "run.json"
+    here = host()
+    if meta_path.exists():
+        meta = read_json(meta_path)
+        if meta.get("mode") != mode:
+            raise RunMismatchError("mode", f"{out} holds a {meta.get('mode')} run, not {mode}")
+        if not isinstance(meta.get("config"), dict):
+            raise CorruptFileError(meta_path, "records no configuration")
+        grown = check_request(meta["config"], cfg, meta_path, extendable=("train.episodes",))
+        schedule = int(meta.get("schedule_episodes", meta["config"].get("train", {}).get(
+            "episodes", cfg.train.episodes)))
+        hosts = meta.get("hosts") if isinstance(meta.get("hosts"), list) else []
+        if not grown and here in hosts:
+            return schedule, None
+        meta.update(config=to_dict(cfg), schedule_episodes=schedule,
+                    hosts=hosts + ([here] if here not in hosts else []))
+        return schedule, meta
+    leftovers = [n for n in ("checkpoint.pt", "episodes.csv") if (out / n).exists()]
+    if leftovers:
+        raise CorruptFileError(meta_path, f"is missing but {out} holds {', '.join(leftovers)}; "
+                                          "restore it or train into a new folder")
+    return cfg.train.episodes, {"mode": mode, "config": to_dict(cfg),
+                                "schedule_episodes": cfg.train.episodes,
+                                "git_revision": git_revision(),
+                                "python": sys.version.split()[0], "torch": torch.__version__,
+                                "hosts": [here]}
