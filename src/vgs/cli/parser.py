@@ -32,6 +32,7 @@ from vgs.cli.runs import (
     cmd_sweep,
     cmd_train,
 )
+from vgs.config import CONDITIONS
 from vgs.errors import VGSError
 
 
@@ -175,7 +176,7 @@ def build_parser() -> argparse.ArgumentParser:
     _config_flags(evaluate)
     evaluate.add_argument("--policy", required=True,
                           help="a training run folder, random, center, or module:function")
-    evaluate.add_argument("--condition", default="nominal", choices=("nominal", "mass", "length"),
+    evaluate.add_argument("--condition", default="nominal", choices=CONDITIONS,
                           help="nominal peg, mass +-15 %%, or length 85-115 %% with the mass "
                                "following (default: %(default)s)")
     evaluate.add_argument("--episodes", type=int,

@@ -27,6 +27,7 @@ from vgs.config.cell import (
 )
 from vgs.config.control import AssemblyConfig, ControllerConfig
 from vgs.config.experiment import (
+    CONDITIONS,
     PROFILES,
     EvalConfig,
     ExperimentConfig,
@@ -45,9 +46,9 @@ from vgs.config.learning import (
 from vgs.config.tree import NO_SUCH_FIELD, from_dict, override, same_config, to_dict
 
 __all__ = [
-    "BACKBONES", "NO_SUCH_FIELD", "PRECISIONS", "PROFILES", "ROTATE_MODES", "AgentConfig",
-    "AssemblyConfig", "CameraConfig", "CellConfig", "ControllerConfig", "EvalConfig",
-    "ExperimentConfig", "FTSensorConfig", "GripperConfig", "HoleConfig", "NetworkConfig",
-    "PegConfig", "ReproduceConfig", "RewardConfig", "SimConfig", "TrainConfig", "from_dict",
-    "override", "profile", "same_config", "to_dict",
+    "BACKBONES", "CONDITIONS", "NO_SUCH_FIELD", "PRECISIONS", "PROFILES", "ROTATE_MODES",
+    "AgentConfig", "AssemblyConfig", "CameraConfig", "CellConfig", "ControllerConfig",
+    "EvalConfig", "ExperimentConfig", "FTSensorConfig", "GripperConfig", "HoleConfig",
+    "NetworkConfig", "PegConfig", "ReproduceConfig", "RewardConfig", "SimConfig", "TrainConfig",
+    "from_dict", "override", "profile", "same_config", "to_dict",
 ]

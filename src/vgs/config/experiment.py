@@ -10,6 +10,11 @@ from vgs.config.control import AssemblyConfig, ControllerConfig
 from vgs.config.learning import AgentConfig, NetworkConfig, RewardConfig, TrainConfig
 from vgs.errors import ConfigError
 
+# The test conditions (paper 4.2), the one list: the evaluation draws each peg
+# (vgs.experiments.evaluate.condition_peg), reproduce.conditions and vgs evaluate --condition
+# take these names, the report titles them (vgs.experiments.reportfigures.CONDITION_TITLES).
+CONDITIONS = ("nominal", "mass", "length")
+
 
 @dataclass(frozen=True)
 class EvalConfig:
@@ -48,7 +53,7 @@ class ReproduceConfig:
     """
 
     train_seeds: tuple[int, ...] = (0,)
-    conditions: tuple[str, ...] = ("nominal", "mass", "length")
+    conditions: tuple[str, ...] = CONDITIONS
     reference_policies: tuple[str, ...] = ("center",)
     sweep_offsets: int = 9
     sweep_trials: int = 20
@@ -57,10 +62,10 @@ class ReproduceConfig:
     def __post_init__(self) -> None:
         if not self.train_seeds:
             raise ConfigError("reproduce.train_seeds", "need at least one seed")
-        bad = [c for c in self.conditions if c not in ("nominal", "mass", "length")]
+        bad = [c for c in self.conditions if c not in CONDITIONS]
         if bad or not self.conditions:
             raise ConfigError("reproduce.conditions",
-                              f"must be a non-empty subset of nominal, mass, length; got {bad}")
+                              f"must be a non-empty subset of {', '.join(CONDITIONS)}; got {bad}")
         bad = [p for p in self.reference_policies if p not in ("center", "random")]
         if bad:
             raise ConfigError("reproduce.reference_policies",

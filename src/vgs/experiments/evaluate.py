@@ -55,7 +55,7 @@ from tqdm import tqdm
 
 from vgs.assembly.record import EpisodeRecord
 from vgs.columns import write_parquet
-from vgs.config import ExperimentConfig, PegConfig, to_dict
+from vgs.config import CONDITIONS, ExperimentConfig, PegConfig, to_dict
 from vgs.errors import ConfigError, CorruptFileError, RunMismatchError
 from vgs.experiments.episodepool import EpisodeTask, run_local, run_ray, task_row
 from vgs.experiments.journal import encode_row, read_journal
@@ -64,7 +64,6 @@ from vgs.experiments.stats import sample_std
 from vgs.runfolder import check_request, locked, read_json, write_json
 from vgs.validate import check_config, check_seed
 
-CONDITIONS = ("nominal", "mass", "length")
 BACKENDS = ("local", "ray")
 EVAL_STREAM = 0xE7A1  # tags the seed sequences of test episodes
 

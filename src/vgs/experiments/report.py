@@ -32,8 +32,9 @@ matplotlib.use("Agg")
 import pandas as pd  # noqa: E402
 
 from vgs.checkpoint import atomic_write_text  # noqa: E402
+from vgs.config import CONDITIONS  # noqa: E402
 from vgs.errors import ConfigError  # noqa: E402
-from vgs.experiments.evaluate import CONDITIONS, summarize  # noqa: E402
+from vgs.experiments.evaluate import summarize  # noqa: E402
 from vgs.experiments.reportdoc import Doc  # noqa: E402
 from vgs.experiments.reportfigures import (  # noqa: E402
     CONDITION_TITLES,

@@ -34,8 +34,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from vgs.config import CONDITIONS  # noqa: E402
 from vgs.errors import ConfigError  # noqa: E402
-from vgs.experiments.evaluate import CONDITIONS, summarize  # noqa: E402
+from vgs.experiments.evaluate import summarize  # noqa: E402
 from vgs.experiments.report import PAPER, load_results  # noqa: E402
 from vgs.experiments.reportfigures import CONDITION_TITLES, LEARNED  # noqa: E402
 from vgs.experiments.stats import (  # noqa: E402
