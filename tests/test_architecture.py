@@ -104,3 +104,12 @@ def test_no_new_import_cycle() -> None:
         if len(group) > 1 and group not in cycles:
             cycles.append(group)
     assert cycles == KNOWN_CYCLES
+
+
+MAX_MODULE_LINES = 400  # issue 16: a module a newcomer can read in one sitting
+
+
+def test_no_module_over_the_line_limit() -> None:
+    long = {str(p.relative_to(ROOT)): n for p in sorted(ROOT.rglob("*.py"))
+            if (n := len(p.read_text().splitlines())) > MAX_MODULE_LINES}
+    assert long == {}
