@@ -14,9 +14,6 @@ import numpy as np
 
 from vgs.control.transforms import exp_so3
 
-GRAVITY = 9.81
-
-
 ROT_DAMPING = 2.5  # lower bound of the rotational admittance damping in contact [N m s/rad]
 
 

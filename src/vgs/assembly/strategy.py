@@ -54,7 +54,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from vgs.assembly.contact import (
-    GRAVITY,
     LENGTH_TOLERANCE,
     MAX_RETRIES,
     RETRY_LIFT,
@@ -66,6 +65,7 @@ from vgs.assembly.contact import (
 )
 from vgs.assembly.record import EpisodeRecord
 from vgs.config import AssemblyConfig, PegConfig
+from vgs.control.arm import GRAVITY
 from vgs.control.robot import Robot
 from vgs.control.transforms import exp_so3, rot_y, rot_z
 from vgs.errors import SimulationError
