@@ -8,6 +8,7 @@ import warnings
 from pathlib import Path
 
 from vgs.errors import ConfigError
+from vgs.experiments.layout import train_folders
 from vgs.runfolder import read_json
 
 PUBLISH_POLICY_LIMIT = 10_000_000  # bytes: final networks a published run commits (light backbone)
@@ -45,7 +46,7 @@ def publish(out: Path, dest: Path) -> list[Path]:
                 target.parent.mkdir(parents=True, exist_ok=True)
                 shutil.copy2(src, target)
                 copied.append(target)
-    finished = [run for run in sorted((out / "train").glob("*"))
+    finished = [run for run in train_folders(out)
                 if (run / "checkpoint.pt").exists() and (run / "convergence.json").exists()]
     if finished:
         from vgs.experiments.export_policy import export_policy

@@ -35,6 +35,7 @@ from vgs.checkpoint import atomic_write_text  # noqa: E402
 from vgs.config import CONDITIONS  # noqa: E402
 from vgs.errors import ConfigError  # noqa: E402
 from vgs.experiments.evaluate import summarize  # noqa: E402
+from vgs.experiments.layout import eval_tables, train_folders  # noqa: E402
 from vgs.experiments.reportdoc import Doc  # noqa: E402
 from vgs.experiments.reportfigures import (  # noqa: E402
     CONDITION_TITLES,
@@ -78,7 +79,7 @@ def load_results(out: Path) -> pd.DataFrame:
     Raises:
         ConfigError: If there are none.
     """
-    tables = sorted((out / "eval").glob("*/*/episodes.parquet"))
+    tables = eval_tables(out)
     if not tables:
         raise ConfigError("report", f"no evaluation results under {out / 'eval'} "
                                     "(expected eval/<policy>/<condition>/episodes.parquet)")
@@ -176,7 +177,7 @@ ONE_STEP_TARGET = (
 
 def _training_rows(out: Path) -> list[list[str]]:
     rows = []
-    for run in sorted((out / "train").glob("*")):
+    for run in train_folders(out):
         csv_path = run / "episodes.csv"
         if not csv_path.exists():
             continue
@@ -301,7 +302,7 @@ def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
     doc.img(plot_grasp_positions(df, figures / "grasp_positions.png"),
             "Realised grasp offset along the peg axis from the centre of mass, test episodes")
 
-    runs = [r for r in sorted((out / "train").glob("*")) if (r / "episodes.csv").exists()]
+    runs = [r for r in train_folders(out) if (r / "episodes.csv").exists()]
     if runs:
         doc.h(2, "Training")
         doc.p(ONE_STEP_TARGET)
