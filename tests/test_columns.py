@@ -26,7 +26,7 @@ from vgs.columns import (
     markdown,
 )
 from vgs.config import profile
-from vgs.experiments import sweep, train
+from vgs.experiments import sweep, trainfolder
 from vgs.experiments.evaluate import EvalSpec, plan_episodes
 from vgs.experiments.journal import encode_row, read_journal
 from vgs.experiments.status import _flag
@@ -68,7 +68,7 @@ def test_names_carry_their_units_and_the_mapping_is_closed() -> None:
     # every column a row can hold is in the vocabulary
     assert set(EpisodeRecord(0, 0.55, 0.1).to_row()) <= set(COLUMNS)
     assert {f"time_{p}_s" for p in PHASES} <= set(COLUMNS)
-    assert set(train.CSV_COLUMNS) <= set(COLUMNS) and set(sweep.COLUMNS) <= set(COLUMNS)
+    assert set(trainfolder.CSV_COLUMNS) <= set(COLUMNS) and set(sweep.COLUMNS) <= set(COLUMNS)
 
 
 def test_record_row_converts_units() -> None:
@@ -229,14 +229,14 @@ def test_legacy_tables_still_load(tmp_path: Path) -> None:
     assert np.array_equal(df["assembly_time_s"].to_numpy(float),
                           raw["assembly_time"].to_numpy(float), equal_nan=True)
     # a training table of 0/1 booleans, and one with both (a run resumed across the change)
-    header = ",".join(train.CSV_COLUMNS)
+    header = ",".join(trainfolder.CSV_COLUMNS)
     for flags in (("0", "1"), ("1", "True"), ("False", "0")):
         lines = [header]
         for i, flag in enumerate(flags):
-            row = dict.fromkeys(train.CSV_COLUMNS, "0")
+            row = dict.fromkeys(trainfolder.CSV_COLUMNS, "0")
             row.update(episode=str(i), mode="vgs", grasp_success=flag, assembly_success=flag,
                        explored=flag, failure_reason="")
-            lines.append(",".join(row[c] for c in train.CSV_COLUMNS))
+            lines.append(",".join(row[c] for c in trainfolder.CSV_COLUMNS))
         table = tmp_path / "episodes.csv"
         table.write_text("\n".join(lines) + "\n")
         df = read_table(table)
@@ -285,9 +285,10 @@ def test_an_evaluation_started_before_the_vocabulary_resumes(
     """A journal of legacy rows (old names and units, bare NaN, the old checksum) resumed by
     this vgs gives the table an uninterrupted run writes (physics-free stand-in)."""
     from experiments import fakes
+    from vgs.experiments import episodepool
     from vgs.experiments import evaluate as evaluate_mod
 
-    monkeypatch.setattr(evaluate_mod, "EpisodeRunner", fakes.FakeRunner)
+    monkeypatch.setattr(episodepool, "EpisodeRunner", fakes.FakeRunner)
     cfg = fakes.tiny_config()
     spec = EvalSpec("random", "length", 4, seed=2)
     reference = evaluate_mod.evaluate(cfg, spec, tmp_path / "ref", workers=1, progress=False)

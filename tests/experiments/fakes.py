@@ -74,11 +74,11 @@ class FakeRunner:
 
 def install(delay: float = 0.0) -> None:
     """Put :class:`FakeRunner` in place of the physics for training and evaluation."""
-    from vgs.experiments import evaluate, train
+    from vgs.experiments import episodepool, train
 
     FakeRunner.delay = delay
     train.EpisodeRunner = FakeRunner  # type: ignore[misc]
-    evaluate.EpisodeRunner = FakeRunner  # type: ignore[misc]
+    episodepool.EpisodeRunner = FakeRunner  # type: ignore[misc]
 
 
 def run_cli(argv: list[str], delay: float) -> None:

@@ -163,7 +163,7 @@ def test_heuristic_workers_start_without_torch() -> None:
     code = (
         "import sys\n"
         "from vgs.config import profile\n"
-        "from vgs.experiments.evaluate import EpisodeWorker, plan_episodes\n"
+        "from vgs.experiments.episodepool import EpisodeWorker\n"
         "cfg = profile('smoke')\n"
         "worker = EpisodeWorker(cfg)\n"
         "worker.policy('center')\n"
@@ -175,7 +175,7 @@ def test_heuristic_workers_start_without_torch() -> None:
 
 
 def test_network_worker_uses_one_torch_thread(cfg, run_dir: Path) -> None:
-    from vgs.experiments.evaluate import EpisodeWorker
+    from vgs.experiments.episodepool import EpisodeWorker
 
     threads = torch.get_num_threads()
     try:

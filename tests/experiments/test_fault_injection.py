@@ -56,13 +56,13 @@ def _child(kind: str, out: str, delay: float) -> None:
 
 @pytest.fixture(scope="module")
 def fake_physics():
-    from vgs.experiments import evaluate as evaluate_mod
+    from vgs.experiments import episodepool
     from vgs.experiments import train as train_mod
 
-    saved = train_mod.EpisodeRunner, evaluate_mod.EpisodeRunner
+    saved = train_mod.EpisodeRunner, episodepool.EpisodeRunner
     fakes.install()
     yield
-    train_mod.EpisodeRunner, evaluate_mod.EpisodeRunner = saved
+    train_mod.EpisodeRunner, episodepool.EpisodeRunner = saved
 
 
 @pytest.fixture(scope="module")

@@ -23,11 +23,11 @@ TRAIN = ["train", "--mode", "vgs", *fakes.CLI_FLAGS]
 
 @pytest.fixture(autouse=True)
 def fake_physics(monkeypatch: pytest.MonkeyPatch):
-    from vgs.experiments import evaluate as evaluate_mod
+    from vgs.experiments import episodepool
     from vgs.experiments import train as train_mod
 
     monkeypatch.setattr(train_mod, "EpisodeRunner", fakes.FakeRunner)
-    monkeypatch.setattr(evaluate_mod, "EpisodeRunner", fakes.FakeRunner)
+    monkeypatch.setattr(episodepool, "EpisodeRunner", fakes.FakeRunner)
     monkeypatch.setattr("os.cpu_count", lambda: 1)
 
 

@@ -27,11 +27,11 @@ REPO = Path(__file__).resolve().parents[2]
 
 @pytest.fixture(autouse=True)
 def fake_physics(monkeypatch: pytest.MonkeyPatch):
-    from vgs.experiments import evaluate as evaluate_mod
+    from vgs.experiments import episodepool
     from vgs.experiments import train as train_mod
 
     monkeypatch.setattr(train_mod, "EpisodeRunner", fakes.FakeRunner)
-    monkeypatch.setattr(evaluate_mod, "EpisodeRunner", fakes.FakeRunner)
+    monkeypatch.setattr(episodepool, "EpisodeRunner", fakes.FakeRunner)
     monkeypatch.setattr("os.cpu_count", lambda: 1)
 
 
@@ -89,7 +89,7 @@ def _run_folder(folder: Path, mode: str, checkpoint_bytes: bytes, finished: bool
                                                  "schedule_episodes": 6}))
     (folder / "checkpoint.pt").write_bytes(checkpoint_bytes)
     if finished:
-        from vgs.experiments.train import CSV_COLUMNS, episode_seed
+        from vgs.experiments.trainfolder import CSV_COLUMNS, episode_seed
 
         with (folder / "episodes.csv").open("w", newline="") as fh:
             writer = csv.DictWriter(fh, fieldnames=CSV_COLUMNS)

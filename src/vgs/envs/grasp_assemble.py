@@ -50,9 +50,9 @@ import numpy as np
 from gymnasium import spaces
 
 from vgs.assembly.episode import EpisodeRunner
-from vgs.config import ExperimentConfig, PegConfig, override, profile
+from vgs.config import CONDITIONS, ExperimentConfig, PegConfig, override, profile
 from vgs.errors import ConfigError
-from vgs.experiments.evaluate import CONDITIONS, condition_peg
+from vgs.experiments.evaluate import condition_peg
 from vgs.experiments.policies import pixel_command
 from vgs.grasping.actions import peg_mask, rotation_angle
 from vgs.grasping.rewards import MODES, episode_reward, next_threshold

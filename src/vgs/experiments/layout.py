@@ -1,5 +1,5 @@
-"""Where a reproduction folder keeps each stage's results (torch-free, shared by ``reproduce``
-and ``status``).
+"""Where a reproduction folder keeps each stage's results (torch-free, shared by ``reproduce``,
+``status``, the report and ``--publish``).
 
 ::
 
@@ -68,3 +68,15 @@ def eval_jobs(cfg: ExperimentConfig, out: Path) -> list[EvalJob]:
     policies += [(ref, ref, out / "eval" / ref / "s0") for ref in cfg.reproduce.reference_policies]
     return [EvalJob(label, spec, condition, folder / condition)
             for condition in cfg.reproduce.conditions for label, spec, folder in policies]
+
+
+def train_folders(out: Path) -> list[Path]:
+    """The training-run folders found in ``out/train``, sorted, whatever the configuration (the
+    report and ``--publish`` read a folder as they find it)."""
+    return sorted((out / "train").glob("*"))
+
+
+def eval_tables(out: Path) -> list[Path]:
+    """The merged evaluation tables found in ``out``, sorted:
+    ``DIR/eval/<label>/<condition>/episodes.parquet``."""
+    return sorted((out / "eval").glob("*/*/episodes.parquet"))

@@ -113,7 +113,7 @@ def load_trained_agent(run_dir: Path, device: str = "cpu", field: str = "policy"
         CorruptFileError: If ``run.json`` cannot be read, or the policy files do not fit it;
             :class:`vgs.errors.CheckpointError` if the checkpoint is refused.
     """
-    from vgs.experiments.train import load_checkpoint
+    from vgs.experiments.trainfolder import load_checkpoint
     from vgs.grasping.agent import GraspAgent
     from vgs.runfolder import read_json
 

@@ -21,38 +21,30 @@ see :mod:`vgs.experiments.evaluate`): 2000 resamples of the episode indices, per
 
 from __future__ import annotations
 
-import base64
-import html
 import json
 import math
-import shutil
-import warnings
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from vgs.checkpoint import atomic_write_text  # noqa: E402
+from vgs.config import CONDITIONS  # noqa: E402
 from vgs.errors import ConfigError  # noqa: E402
-from vgs.experiments.evaluate import CONDITIONS, summarize  # noqa: E402
+from vgs.experiments.evaluate import summarize  # noqa: E402
+from vgs.experiments.layout import eval_tables, train_folders  # noqa: E402
+from vgs.experiments.reportdoc import Doc  # noqa: E402
+from vgs.experiments.reportfigures import (  # noqa: E402
+    CONDITION_TITLES,
+    plot_grasp_positions,
+    plot_times,
+    policy_order,
+)
+from vgs.experiments.stats import MIN_SUCCESSES, Gain, efficiency_gain  # noqa: E402
 from vgs.runfolder import read_json, read_table  # noqa: E402
-
-BOOTSTRAP_RESAMPLES = 2000
-# Fewer successful assemblies than this per policy: times are not compared (no verdict, no CI).
-MIN_SUCCESSES = 5
-LEARNED = ("baseline", "vgs")
-CONDITION_TITLES = {
-    "nominal": "Nominal peg (paper Fig. 8)",
-    "mass": "Mass +-15 % (paper Fig. 9)",
-    "length": "Length 85-115 %, mass following (paper Fig. 10)",
-}
-
 
 
 def load_paper_reference() -> dict[str, dict[str, Any]]:
@@ -77,72 +69,6 @@ def load_paper_reference() -> dict[str, dict[str, Any]]:
 PAPER = load_paper_reference()
 
 
-# -- statistics ----------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class Gain:
-    """Efficiency gain of VGS over the baseline [%] with its bootstrap 95 % interval."""
-
-    value: float
-    low: float
-    high: float
-    paired: bool
-    n: int
-
-    def text(self) -> str:
-        if not math.isfinite(self.value):
-            return "n/a"
-        if not math.isfinite(self.low):
-            return f"{self.value:+.2f} % [too few successes]"
-        return f"{self.value:+.2f} % [{self.low:+.2f}, {self.high:+.2f}]"
-
-
-def _mean_success(times: np.ndarray, ok: np.ndarray) -> float:
-    return float(times[ok].mean()) if ok.any() else math.nan
-
-
-def time_arrays(df: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
-    """``(assembly_time_s, assembly_success)`` of an evaluation table, ordered by episode
-    index."""
-    df = df.sort_values("index")
-    return df["assembly_time_s"].to_numpy(float), df["assembly_success"].to_numpy(bool)
-
-
-def gain_pct(tb: np.ndarray, ob: np.ndarray, tv: np.ndarray, ov: np.ndarray) -> float:
-    """``100 (T_base - T_vgs) / T_base`` on the mean times of the successes (NaN without any)."""
-    mb, mv = _mean_success(tb, ob), _mean_success(tv, ov)
-    return 100.0 * (mb - mv) / mb if math.isfinite(mb) and math.isfinite(mv) else math.nan
-
-
-def efficiency_gain(base: pd.DataFrame, vgs: pd.DataFrame, resamples: int = BOOTSTRAP_RESAMPLES,
-                    seed: int = 0) -> Gain:
-    """``100 (T_base - T_vgs) / T_base`` on mean successful assembly times, bootstrap 95 % CI.
-
-    The interval is NaN when either policy has fewer than :data:`MIN_SUCCESSES` successful
-    assemblies (a mean of one or two times has no useful interval). Episodes are paired by
-    ``index`` when both tables hold the same indices (the same scenes); otherwise each table is
-    resampled on its own.
-    """
-    base = base.sort_values("index")
-    vgs = vgs.sort_values("index")
-    tb, ob = time_arrays(base)
-    tv, ov = time_arrays(vgs)
-    value = gain_pct(tb, ob, tv, ov)
-    paired = list(base["index"]) == list(vgs["index"])
-    if not math.isfinite(value) or min(ob.sum(), ov.sum()) < MIN_SUCCESSES:
-        return Gain(value, math.nan, math.nan, paired, len(base))
-    rng = np.random.default_rng(seed)
-    gains = np.empty(resamples)
-    for b in range(resamples):
-        ib = rng.integers(len(tb), size=len(tb))
-        iv = ib if paired else rng.integers(len(tv), size=len(tv))
-        gains[b] = gain_pct(tb[ib], ob[ib], tv[iv], ov[iv])
-    gains = gains[np.isfinite(gains)]
-    low, high = (np.percentile(gains, [2.5, 97.5]) if gains.size else (math.nan, math.nan))
-    return Gain(value, float(low), float(high), paired, len(base))
-
-
 # -- loading -------------------------------------------------------------------------------------
 
 
@@ -153,7 +79,7 @@ def load_results(out: Path) -> pd.DataFrame:
     Raises:
         ConfigError: If there are none.
     """
-    tables = sorted((out / "eval").glob("*/*/episodes.parquet"))
+    tables = eval_tables(out)
     if not tables:
         raise ConfigError("report", f"no evaluation results under {out / 'eval'} "
                                     "(expected eval/<policy>/<condition>/episodes.parquet)")
@@ -183,9 +109,6 @@ def hosts_note(df: pd.DataFrame) -> str:
     return f"All test episodes ran on one host: {names[0]}." if names else ""
 
 
-def policy_order(policies: list[str]) -> list[str]:
-    """Learned policies first (baseline, vgs), then the references."""
-    return [p for p in LEARNED if p in policies] + sorted(p for p in policies if p not in LEARNED)
 
 
 def results_table(df: pd.DataFrame) -> pd.DataFrame:
@@ -207,148 +130,8 @@ def results_table(df: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-# -- figures -------------------------------------------------------------------------------------
-
-COLORS = {"baseline": "tab:blue", "vgs": "tab:red", "center": "tab:gray", "random": "tab:green"}
 
 
-def _color(policy: str) -> str:
-    return COLORS.get(policy, "tab:purple")
-
-
-def plot_times(df: pd.DataFrame, condition: str, path: Path) -> Path:
-    """Assembly time of every successful test episode (left) and their distribution (right)."""
-    part = df[(df["condition"] == condition) & df["assembly_success"].astype(bool)]
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4))
-    times_all = part["assembly_time_s"].to_numpy(float)
-    bins = (np.linspace(times_all.min(), times_all.max(), 30) if times_all.size > 1 else 10)
-    for policy in policy_order(sorted(set(df["policy"]))):
-        mine = part[part["policy"] == policy]
-        if mine.empty:
-            continue
-        t = mine["assembly_time_s"].to_numpy(float)
-        ax1.plot(mine["index"], t, ".", ms=4, alpha=0.7, color=_color(policy),
-                 label=f"{policy} (mean {t.mean():.1f} s, n={t.size})")
-        ax1.axhline(t.mean(), color=_color(policy), lw=1)
-        ax2.hist(t, bins=bins, alpha=0.45, color=_color(policy), label=policy)
-    ax1.set_xlabel("test episode")
-    ax1.set_ylabel("assembly time [s, simulated]")
-    ax1.legend(fontsize=8)
-    ax2.set_xlabel("assembly time [s, simulated]")
-    ax2.set_ylabel("episodes")
-    ax2.legend(fontsize=8)
-    fig.suptitle(f"Assembly time, successful tests: {CONDITION_TITLES[condition]}")
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return path
-
-
-def plot_grasp_positions(df: pd.DataFrame, path: Path) -> Path:
-    """Where each policy grasped: the realised offset from the centre of mass along the peg."""
-    conditions = [c for c in CONDITIONS if c in set(df["condition"])]
-    fig, axes = plt.subplots(1, len(conditions), figsize=(4.5 * len(conditions), 3.6),
-                             squeeze=False)
-    bins = np.linspace(-60, 60, 41)
-    for ax, condition in zip(axes[0], conditions, strict=True):
-        part = df[(df["condition"] == condition) & df["grasp_success"].astype(bool)]
-        for policy in policy_order(sorted(set(df["policy"]))):
-            off = part.loc[part["policy"] == policy, "grasp_offset_mm"].dropna()
-            if off.empty:
-                continue
-            ax.hist(off, bins=bins, alpha=0.45, color=_color(policy),
-                    label=f"{policy} (mean |l| {off.abs().mean():.1f} mm)")
-        ax.set_title(condition)
-        ax.set_xlabel("grasp offset from the centre of mass [mm]")
-        ax.set_ylabel("grasps")
-        ax.legend(fontsize=7)
-    fig.suptitle("Where each policy grasps along the peg (test episodes)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return path
-
-
-# -- the document --------------------------------------------------------------------------------
-
-
-class Doc:
-    """Report content as blocks, rendered to Markdown and to self-contained HTML."""
-
-    def __init__(self, root: Path) -> None:
-        self.root = root
-        self.blocks: list[tuple[str, Any]] = []
-
-    def h(self, level: int, text: str) -> None:
-        self.blocks.append(("h", (level, text)))
-
-    def p(self, text: str) -> None:
-        self.blocks.append(("p", text))
-
-    def items(self, lines: list[str]) -> None:
-        self.blocks.append(("ul", lines))
-
-    def table(self, header: list[str], rows: list[list[str]]) -> None:
-        self.blocks.append(("table", (header, rows)))
-
-    def img(self, path: Path, caption: str) -> None:
-        self.blocks.append(("img", (path, caption)))
-
-    def markdown(self) -> str:
-        out: list[str] = []
-        for kind, value in self.blocks:
-            if kind == "h":
-                out.append("#" * value[0] + " " + value[1])
-            elif kind == "p":
-                out.append(value)
-            elif kind == "ul":
-                out.append("\n".join(f"- {line}" for line in value))
-            elif kind == "table":
-                header, rows = value
-                out.append("\n".join(["| " + " | ".join(header) + " |",
-                                      "|" + "|".join("---" for _ in header) + "|",
-                                      *("| " + " | ".join(r) + " |" for r in rows)]))
-            elif kind == "img":
-                path, caption = value
-                out.append(f"![{caption}]({path.relative_to(self.root).as_posix()})\n\n"
-                           f"*{caption}*")
-        return "\n\n".join(out) + "\n"
-
-    def html(self, title: str) -> str:
-        def inline(text: str) -> str:
-            t = html.escape(text)
-            parts = t.split("`")
-            t = "".join(f"<code>{p}</code>" if i % 2 else p for i, p in enumerate(parts))
-            parts = t.split("**")
-            return "".join(f"<b>{p}</b>" if i % 2 else p for i, p in enumerate(parts))
-
-        body: list[str] = []
-        for kind, value in self.blocks:
-            if kind == "h":
-                body.append(f"<h{value[0]}>{inline(value[1])}</h{value[0]}>")
-            elif kind == "p":
-                body.append(f"<p>{inline(value)}</p>")
-            elif kind == "ul":
-                body.append("<ul>" + "".join(f"<li>{inline(v)}</li>" for v in value) + "</ul>")
-            elif kind == "table":
-                header, rows = value
-                head = "".join(f"<th>{inline(c)}</th>" for c in header)
-                trs = "".join("<tr>" + "".join(f"<td>{inline(c)}</td>" for c in r) + "</tr>"
-                              for r in rows)
-                body.append(f"<table><thead><tr>{head}</tr></thead><tbody>{trs}</tbody></table>")
-            elif kind == "img":
-                path, caption = value
-                data = base64.b64encode(path.read_bytes()).decode()
-                body.append(f'<figure><img alt="{html.escape(caption)}" '
-                            f'src="data:image/png;base64,{data}"/>'
-                            f"<figcaption>{inline(caption)}</figcaption></figure>")
-        style = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto;line-height:1.45}"
-                 "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;"
-                 "padding:3px 8px;text-align:right}th{background:#eee}td:first-child{text-align:"
-                 "left}img{max-width:100%}figcaption{font-style:italic;color:#444}"
-                 "code{background:#f3f3f3;padding:0 3px}")
-        return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}"
-                f"</title><style>{style}</style></head><body>{''.join(body)}</body></html>\n")
 
 
 def _f(value: Any, digits: int = 1, suffix: str = "") -> str:
@@ -394,7 +177,7 @@ ONE_STEP_TARGET = (
 
 def _training_rows(out: Path) -> list[list[str]]:
     rows = []
-    for run in sorted((out / "train").glob("*")):
+    for run in train_folders(out):
         csv_path = run / "episodes.csv"
         if not csv_path.exists():
             continue
@@ -519,7 +302,7 @@ def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
     doc.img(plot_grasp_positions(df, figures / "grasp_positions.png"),
             "Realised grasp offset along the peg axis from the centre of mass, test episodes")
 
-    runs = [r for r in sorted((out / "train").glob("*")) if (r / "episodes.csv").exists()]
+    runs = [r for r in train_folders(out) if (r / "episodes.csv").exists()]
     if runs:
         doc.h(2, "Training")
         doc.p(ONE_STEP_TARGET)
@@ -558,59 +341,5 @@ def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
     return out / "report.md"
 
 
-PUBLISH_POLICY_LIMIT = 10_000_000  # bytes: final networks a published run commits (light backbone)
-PUBLISHED = ("reproduce.json", "report.md", "report.html", "results.csv", "figures/*.png",
-             "eval/*/*/episodes.parquet", "eval/*/*/episodes.csv", "eval/*/*/summary.json",
-             "train/*/episodes.csv", "train/*/run.json", "train/*/threshold.json",
-             "train/*/convergence.json", "sweep/*")
 
 
-def publish(out: Path, dest: Path) -> list[Path]:
-    """Copy the small result files of a reproduction (no checkpoints, no TensorBoard logs, no
-    journals) from ``out`` to ``dest`` (e.g. ``docs/results/quick``), keeping the layout, and
-    the final networks of each finished training run as a policy folder ``dest/<mode>/``
-    (``dest/<run>/`` when a mode has several runs): ``policy.pt``, ``policy.json`` and
-    ``run.json``, which ``vgs evaluate --policy dest/<mode>`` loads on a fresh clone
-    (:func:`vgs.experiments.export_policy.export_policy`). Networks over
-    ``PUBLISH_POLICY_LIMIT`` (a DenseNet-121 policy) are not published, with a warning.
-
-    Returns:
-        The copied files.
-
-    Raises:
-        ConfigError: If ``out`` holds no report, or a policy folder in ``dest`` holds another
-            run.
-    """
-    if not (out / "report.md").exists():
-        raise ConfigError("report", f"{out} holds no report.md; run vgs report first")
-    copied = []
-    for pattern in PUBLISHED:
-        for src in sorted(out.glob(pattern)):
-            if src.is_file():
-                target = dest / src.relative_to(out)
-                target.parent.mkdir(parents=True, exist_ok=True)
-                shutil.copy2(src, target)
-                copied.append(target)
-    finished = [run for run in sorted((out / "train").glob("*"))
-                if (run / "checkpoint.pt").exists() and (run / "convergence.json").exists()]
-    if finished:
-        from vgs.experiments.export_policy import export_policy
-
-        modes = [str(read_json(run / "run.json").get("mode")) for run in finished]
-        for run, mode in zip(finished, modes, strict=True):
-            folder = dest / (mode if modes.count(mode) == 1 else run.name)
-            written = export_policy(run, folder)
-            files = [written.weights, written.description, folder / "run.json"]
-            size = written.weights.stat().st_size
-            if size > PUBLISH_POLICY_LIMIT:
-                # A DenseNet-121 policy (about 57 MB) is too large to commit: users train it.
-                for f in files:
-                    f.unlink(missing_ok=True)
-                if folder.exists() and not any(folder.iterdir()):
-                    folder.rmdir()
-                warnings.warn(f"{run.name}: its final networks take {size / 1e6:.0f} MB, over "
-                              f"the {PUBLISH_POLICY_LIMIT / 1e6:.0f} MB a published run commits; "
-                              "not published", stacklevel=2)
-                continue
-            copied += files
-    return copied

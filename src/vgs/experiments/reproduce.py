@@ -43,7 +43,8 @@ from vgs.errors import ConfigError, CorruptFileError
 from vgs.experiments.evaluate import EvalSpec, evaluate_many, summarize, write_tables
 from vgs.experiments.layout import eval_jobs, train_runs
 from vgs.experiments.report import build_report
-from vgs.experiments.train import git_revision, train
+from vgs.experiments.train import train
+from vgs.experiments.trainfolder import git_revision
 from vgs.runfolder import check_request, locked, read_json, read_table, write_json
 from vgs.validate import check_config
 

@@ -34,20 +34,19 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from vgs.config import CONDITIONS  # noqa: E402
 from vgs.errors import ConfigError  # noqa: E402
-from vgs.experiments.evaluate import CONDITIONS, summarize  # noqa: E402
-from vgs.experiments.report import (  # noqa: E402
+from vgs.experiments.evaluate import summarize  # noqa: E402
+from vgs.experiments.report import PAPER, load_results  # noqa: E402
+from vgs.experiments.reportfigures import CONDITION_TITLES, LEARNED  # noqa: E402
+from vgs.experiments.stats import (  # noqa: E402
     BOOTSTRAP_RESAMPLES,
-    CONDITION_TITLES,
-    LEARNED,
     MIN_SUCCESSES,
-    PAPER,
     efficiency_gain,
     gain_pct,
-    load_results,
+    sample_std,
     time_arrays,
 )
-from vgs.experiments.stats import sample_std  # noqa: E402
 
 
 def load_seeds(folders: list[Path]) -> pd.DataFrame:
@@ -109,7 +108,7 @@ def mean_gain(pairs: list[tuple[pd.DataFrame, pd.DataFrame]],
 
     Returns:
         ``(mean gain, low, high)`` in percent; the interval is NaN when a run has fewer than
-        :data:`vgs.experiments.report.MIN_SUCCESSES` successes for either policy.
+        :data:`vgs.experiments.stats.MIN_SUCCESSES` successes for either policy.
     """
     arrays = [(*time_arrays(b), *time_arrays(v)) for b, v in pairs]
     gains = [gain_pct(*a) for a in arrays]

@@ -34,7 +34,7 @@ from vgs.assembly.record import PHASES
 from vgs.columns import column, normalize_row
 from vgs.config import CellConfig, ExperimentConfig, PegConfig
 from vgs.errors import ConfigError, VGSError
-from vgs.experiments.stats import population_std
+from vgs.experiments.sweepstats import paired_analysis, summarize
 from vgs.jsonsafe import dumps
 from vgs.runfolder import host, hosts_of
 from vgs.sim.rg2 import PAD_HALF
@@ -51,7 +51,6 @@ COLUMNS: tuple[str, ...] = (
     "peg_turn_deg", "peak_grasp_moment_nm", "peak_moment_measured_nm", "host_cpu",
     "mujoco_version",
 )
-BOOTSTRAP_RESAMPLES = 2000
 
 
 @dataclass(frozen=True)
@@ -318,137 +317,11 @@ def sweep_to_folder(cfg: ExperimentConfig, spec: SweepSpec, out: Path,
     return summary
 
 
-def _stat(values: np.ndarray, fn: Any) -> float | None:
-    return float(fn(values)) if values.size else None
 
 
-def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Per offset: trials, success rate and the mean/std/min/max time of successful trials."""
-    out = []
-    for offset in sorted({r["offset_mm"] for r in rows}):
-        group = [r for r in rows if r["offset_mm"] == offset]
-        times = np.array([r["assembly_time_s"] for r in group if r["assembly_success"]],
-                         dtype=float)
-        out.append({
-            "offset_mm": offset,
-            "n": len(group),
-            "successes": int(times.size),
-            "success_rate": times.size / len(group),
-            "time_mean_s": _stat(times, np.mean),
-            "time_std_s": _stat(times, population_std),
-            "time_min_s": _stat(times, np.min),
-            "time_max_s": _stat(times, np.max),
-            "adjustments_mean": float(np.mean([r["adjustments"] for r in group])),
-            "retry_rate": float(np.mean([r.get("retries", 0) > 0 for r in group])),
-            "peg_lost": sum(r["failure_reason"] == "peg_lost" for r in group),
-            "time_align_mean_s": _stat(np.array([r["time_align_s"] for r in group
-                                                 if r["assembly_success"]], dtype=float), np.mean),
-        })
-    return out
 
 
-def _bootstrap_ci(stat: Any, scenes: np.ndarray, resamples: int,
-                  rng: np.random.Generator) -> tuple[float, float]:
-    """95 % percentile interval of ``stat(scene_sample)`` over scenes drawn with replacement."""
-    values = [stat(rng.choice(scenes, size=scenes.size, replace=True)) for _ in range(resamples)]
-    values = np.array([v for v in values if math.isfinite(v)])
-    if values.size < resamples // 2:
-        return math.nan, math.nan
-    return float(np.percentile(values, 2.5)), float(np.percentile(values, 97.5))
 
 
-def paired_analysis(rows: Sequence[dict[str, Any]], resamples: int = BOOTSTRAP_RESAMPLES,
-                    seed: int = 0) -> dict[str, Any]:
-    """Scene-by-scene comparisons of a paired sweep (every offset on the same scenes).
-
-    - ``vs_center``: per offset, the mean over scenes where both succeeded of
-      ``T(offset) - T(0)`` (total and alignment time), with a 95 % bootstrap interval over
-      scenes; needs the offset 0 in the sweep.
-    - ``slope``: least-squares slope of the assembly time (and of the alignment time) against
-      |offset| over the successful rows, s per mm, with a 95 % interval from resampling whole
-      scenes (all offsets of a drawn scene together).
-    - ``symmetry``: per |offset| > 0, success and mean time at +c and -c, each with its 95 %
-      interval (Wilson for success, bootstrap over scenes for the time).
-
-    Args:
-        rows: Sweep rows with a ``trial`` column (the scene).
-        resamples: Bootstrap resamples.
-        seed: Seed of the resampling.
-    """
-    rng = np.random.default_rng(seed)
-    offsets = sorted({round(float(r["offset_mm"]), 6) for r in rows})
-    table: dict[tuple[int, float], dict[str, Any]] = {
-        (int(r["trial"]), round(float(r["offset_mm"]), 6)): r for r in rows}
-    scenes = np.array(sorted({int(r["trial"]) for r in rows}))
-    out: dict[str, Any] = {"scenes": int(scenes.size), "vs_center": [], "slope": {},
-                           "symmetry": []}
-
-    def ok_time(t: int, o: float, key: str) -> float:
-        r = table.get((t, o))
-        return float(r[key]) if r is not None and r["assembly_success"] else math.nan
-
-    if 0.0 in offsets:
-        for o in offsets:
-            if o == 0.0:
-                continue
-            entry: dict[str, Any] = {"offset_mm": o}
-            for key, name in (("assembly_time_s", "time"), ("time_align_s", "align")):
-                diff = np.array([ok_time(t, o, key) - ok_time(t, 0.0, key) for t in scenes])
-                lookup = dict(zip(scenes.tolist(), diff.tolist(), strict=True))
-
-                def mean_diff(sample: np.ndarray, lookup: dict[int, float] = lookup) -> float:
-                    v = np.array([lookup[int(t)] for t in sample])
-                    v = v[np.isfinite(v)]
-                    return float(v.mean()) if v.size else math.nan
-
-                lo, hi = _bootstrap_ci(mean_diff, scenes, resamples, rng)
-                entry[f"{name}_diff_s"] = mean_diff(scenes)
-                entry[f"{name}_diff_ci_s"] = [lo, hi]
-                entry["pairs"] = int(np.isfinite(diff).sum())
-            out["vs_center"].append(entry)
-    for key, name in (("assembly_time_s", "time"), ("time_align_s", "align")):
-        def slope(sample: np.ndarray, key: str = key) -> float:
-            x, y = [], []
-            for t in sample:
-                for o in offsets:
-                    v = ok_time(int(t), o, key)
-                    if math.isfinite(v):
-                        x.append(abs(o))
-                        y.append(v)
-            if len(set(x)) < 2:
-                return math.nan
-            return float(np.polyfit(np.array(x), np.array(y), 1)[0])
-
-        lo, hi = _bootstrap_ci(slope, scenes, resamples, rng)
-        out["slope"][f"{name}_s_per_mm"] = slope(scenes)
-        out["slope"][f"{name}_ci_s_per_mm"] = [lo, hi]
-    for o in offsets:
-        if o <= 0.0 or -o not in offsets:
-            continue
-        entry = {"abs_offset_mm": o}
-        for side, v in (("plus", o), ("minus", -o)):
-            group = [table[(int(t), v)] for t in scenes if (int(t), v) in table]
-            k, n = sum(bool(r["assembly_success"]) for r in group), len(group)
-            entry[f"{side}_success"] = [k, n]
-            entry[f"{side}_success_ci"] = list(wilson_interval(k, n))
-
-            def mean_time(sample: np.ndarray, v: float = v) -> float:
-                vals = np.array([ok_time(int(t), v, "assembly_time_s") for t in sample])
-                vals = vals[np.isfinite(vals)]
-                return float(vals.mean()) if vals.size else math.nan
-
-            entry[f"{side}_time_s"] = mean_time(scenes)
-            entry[f"{side}_time_ci_s"] = list(_bootstrap_ci(mean_time, scenes, resamples, rng))
-        out["symmetry"].append(entry)
-    return out
 
 
-def wilson_interval(k: int, n: int, z: float = 1.96) -> tuple[float, float]:
-    """Wilson score 95 % interval of a success rate k / n."""
-    if n == 0:
-        return math.nan, math.nan
-    p = k / n
-    denom = 1 + z * z / n
-    centre = (p + z * z / (2 * n)) / denom
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
-    return max(0.0, centre - half), min(1.0, centre + half)

@@ -44,15 +44,12 @@ their meaning and the extra ones act at the final epsilon. The folder is locked
 
 from __future__ import annotations
 
-import csv
 import math
 import multiprocessing as mp
 import os
-import subprocess
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -60,43 +57,36 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
-from vgs import checkpoint
 from vgs.assembly.episode import EpisodeRunner, GraspCommand
 from vgs.assembly.record import EpisodeRecord
-from vgs.config import ExperimentConfig, to_dict
+from vgs.config import ExperimentConfig
 from vgs.errors import (
     CheckpointError,
     ConfigError,
     CorruptFileError,
-    RunMismatchError,
     VGSError,
 )
 from vgs.experiments.policies import pixel_command
+from vgs.experiments.trainfolder import (
+    RECORD_COLUMNS,
+    TrainState,
+    _open_csv,
+    _sha256,
+    check_start,
+    episode_seed,
+    load_checkpoint,
+    read_rows,
+    save_checkpoint,
+)
 from vgs.grasping.agent import DeltaQMonitor, GraspAction, GraspAgent
 from vgs.grasping.preprocess import peg_mask
-from vgs.grasping.replay import DEFAULT_CACHE, Renderer, ReplayBuffer, Transition, maps_digest
+from vgs.grasping.replay import DEFAULT_CACHE, Renderer, ReplayBuffer, Transition
 from vgs.grasping.rewards import MODES, episode_reward, next_threshold
-from vgs.runfolder import check_request, host, locked, read_json, write_json
+from vgs.runfolder import locked, write_json
 from vgs.sim.camera import Heightmap
 from vgs.validate import check_config
 
-# Column vocabulary of vgs.columns; booleans are written True/False (0/1 before 2026-12).
-CSV_COLUMNS = (
-    "episode", "mode", "seed", "epsilon", "explored", "rotation", "row", "col", "q_value",
-    "grasp_success", "grasp_offset_mm", "assembly_success", "assembly_time_s", "adjustments",
-    "failure_reason", "r_grasp", "r_assembly", "reward", "threshold_s", "loss", "delta_q",
-    "wall_s",
-)
-RECORD_COLUMNS = ("grasp_success", "grasp_offset_mm", "assembly_success", "assembly_time_s",
-                  "adjustments", "failure_reason")  # from EpisodeRecord.to_row()
-
-
 REPLAY_CACHE = DEFAULT_CACHE  # re-rendered replay heightmaps kept in memory
-
-
-def episode_seed(root: int, episode: int) -> int:
-    """Seed of one episode from (root seed, episode index)."""
-    return int(np.random.SeedSequence([root, episode]).generate_state(1)[0])
 
 
 def scene_renderer(runner: EpisodeRunner) -> Renderer:
@@ -122,101 +112,6 @@ def resolve_device(name: str) -> str:
     return name
 
 
-def git_revision() -> str:
-    try:
-        out = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True,
-                             cwd=Path(__file__).resolve().parent, timeout=5)
-        return out.stdout.strip() or "unknown"
-    except (OSError, subprocess.SubprocessError):
-        return "unknown"
-
-
-@dataclass
-class TrainState:
-    """Everything a checkpoint restores besides the networks."""
-
-    episode: int = 0
-    threshold: float | None = None
-    exploration_times: list[float] | None = None
-    rng_state: dict[str, Any] | None = None
-    table_sha256: str | None = None
-
-
-def read_rows(path: Path, cfg: ExperimentConfig, mode: str, keep: int,
-              digest: str | None = None) -> list[str]:
-    """The header and the rows of ``episodes.csv`` before episode ``keep`` (the checkpoint's),
-    checked, as the lines of the file.
-
-    Each kept row must be episode 0, 1, ... in order, of this mode and with the episode's
-    planned seed, and the kept lines must hash to ``digest`` (SHA-256 recorded by the
-    checkpoint), so a row changed after its checkpoint is caught. Rows from ``keep`` on were
-    written after the checkpoint and are dropped (a line cut short by a kill is among them).
-
-    Raises:
-        CorruptFileError: Naming the file and line of an unreadable or foreign row, or when
-            fewer rows than the checkpoint's episode count are left or they were changed.
-    """
-    header = ",".join(CSV_COLUMNS) + "\r\n"
-    if not path.exists():
-        if keep:
-            raise CorruptFileError(path, f"is missing but the checkpoint is at episode {keep}; "
-                                         "restore it or train again into a new folder")
-        return [header]
-    data = path.read_bytes()
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        line = data[:exc.start].count(b"\n") + 1
-        raise CorruptFileError(path, "is not UTF-8 text", line=line) from None
-    lines = text.splitlines(keepends=True)
-    if not lines:
-        if keep:
-            raise CorruptFileError(path, f"is empty but the checkpoint is at episode {keep}")
-        return [header]
-    if lines[0].rstrip("\r\n") != header.rstrip("\r\n"):
-        raise CorruptFileError(path, "is not vgs's training table header", line=1)
-    for number, line in enumerate(lines[1:keep + 1], start=2):
-        want = number - 2
-        fields = next(csv.reader([line]), [])
-        if len(fields) != len(CSV_COLUMNS) or not line.endswith("\n"):
-            raise CorruptFileError(path, "is not a row of this table", line=number)
-        record = dict(zip(CSV_COLUMNS, fields, strict=True))
-        try:
-            episode, seed = int(record["episode"]), int(record["seed"])
-        except ValueError:
-            raise CorruptFileError(path, "is not a row of this table", line=number) from None
-        if episode != want or seed != episode_seed(cfg.seed, want) or record["mode"] != mode:
-            raise CorruptFileError(path, f"is not episode {want} of this run (episode "
-                                         f"{record['episode']}, seed {record['seed']}, mode "
-                                         f"{record['mode']}); restore the file or train again "
-                                         "into a new folder", line=number)
-    kept = lines[:keep + 1]
-    if len(kept) - 1 < keep:
-        raise CorruptFileError(path, f"holds {len(kept) - 1} rows but the checkpoint is at "
-                                     f"episode {keep}; restore it or train again into a new "
-                                     "folder")
-    if digest is not None and _sha256("".join(kept).encode("utf-8")) != digest:
-        raise CorruptFileError(path, f"rows 0-{keep - 1} differ from those the checkpoint saw; "
-                                     "restore the file or train again into a new folder")
-    return kept
-
-
-def _sha256(data: bytes) -> str:
-    import hashlib
-
-    return hashlib.sha256(data).hexdigest()
-
-
-def _open_csv(path: Path, lines: list[str]) -> Any:
-    """Append-only per-episode table, rewritten (atomically) with the checked ``lines`` first."""
-    tmp = path.with_name(f".{path.name}.tmp")
-    with tmp.open("w", newline="", encoding="utf-8") as f:
-        f.write("".join(lines))
-    os.replace(tmp, path)
-    f = path.open("a", newline="", encoding="utf-8")
-    return f, csv.DictWriter(f, fieldnames=CSV_COLUMNS)
-
-
 _COLLECTOR_RUNNER: EpisodeRunner | None = None
 
 
@@ -235,139 +130,6 @@ def _run_command(seed: int, command: GraspCommand) -> EpisodeRecord:
         raise VGSError("training collector used before its initialisation")
     record, _, _ = _COLLECTOR_RUNNER.run(seed, lambda hm: command)
     return record
-
-
-def save_checkpoint(path: Path, agent: GraspAgent, replay: ReplayBuffer, state: TrainState,
-                    monitor: DeltaQMonitor) -> None:
-    """Write atomically and pickle-free (:mod:`vgs.checkpoint`): a kill never leaves half a
-    checkpoint, and loading it runs no code."""
-    agent_state = agent.state_dict()
-    replay_state = replay.state_dict()
-    arrays = {k: None if v is None else torch.from_numpy(np.ascontiguousarray(v))
-              for k, v in replay_state.pop("arrays").items()}
-    tensors = {"eva_net": agent_state.pop("eva_net"), "target_net": agent_state.pop("target_net"),
-               "optimizer": agent_state.pop("optimizer"), "replay_arrays": arrays,
-               "torch_rng": torch.get_rng_state()}
-    meta = {"episode": state.episode, "threshold": state.threshold,
-            "exploration_times": state.exploration_times, "rng_state": state.rng_state,
-            "monitor": monitor.state_dict(), "agent": agent_state, "replay": replay_state,
-            "table_sha256": state.table_sha256}
-    newest = replay.newest()
-    if replay.keeps_scenes and newest is not None:  # checked on resume (module docstring)
-        scene = replay.scene(newest)
-        meta["replay_check"] = {"scene": scene, "sha256": maps_digest(*replay.maps(scene))}
-    checkpoint.save(path, tensors, meta)
-
-
-def _scenes_from_maps(path: Path, arrays: dict[str, Any], replay: ReplayBuffer,
-                      root_seed: int | None) -> dict[str, Any]:
-    """The replay arrays of a checkpoint that kept heightmaps (``vgs-checkpoint/2``) as scene
-    seeds: the training loop adds one transition per episode, so a transition's serial is its
-    episode and its scene is ``episode_seed(root_seed, serial)``. The oldest, a middle and the
-    newest transition are re-rendered and must equal the stored maps bit for bit.
-
-    Raises:
-        CheckpointError: If the stored maps are not those this host renders for the scenes.
-    """
-    common = {k: v for k, v in arrays.items()
-              if k not in ("color", "depth", "next_color", "next_depth")}
-    if arrays["color"] is None:
-        return {"scene": None, **common}
-    if root_seed is None or arrays["next_color"] is not None or arrays["has_next"].any():
-        raise CheckpointError(path, "holds a replay of heightmaps that cannot be turned into "
-                                    "scene seeds; train again into a new folder")
-    serials = arrays["serial"].astype(np.int64)
-    scenes = np.array([episode_seed(root_seed, int(e)) for e in serials], np.int64)
-    order = np.argsort(serials, kind="stable")
-    for slot in sorted({int(order[0]), int(order[len(order) // 2]), int(order[-1])}):
-        color, depth = replay.render(int(scenes[slot]))
-        if not (np.array_equal(color, arrays["color"][slot])
-                and np.array_equal(np.asarray(depth, np.float32), arrays["depth"][slot])):
-            raise CheckpointError(path, f"holds replay heightmaps (vgs-checkpoint/2) that differ "
-                                        f"from those this host renders for their scenes "
-                                        f"(episode {int(serials[slot])}); finish the run with "
-                                        "the vgs that wrote it or train again into a new folder")
-    return {"scene": scenes, **common}
-
-
-def load_checkpoint(path: Path, agent: GraspAgent, replay: ReplayBuffer | None = None,
-                    monitor: DeltaQMonitor | None = None, device: str = "cpu",
-                    root_seed: int | None = None) -> TrainState:
-    """Restore a :func:`save_checkpoint` file into ``agent`` (and ``replay``, ``monitor``, the
-    torch RNG when given); return the counters.
-
-    A scene-keyed ``replay`` re-renders the newest transition's maps and compares them with
-    the hash the checkpoint recorded; one from a checkpoint that kept heightmaps is turned into
-    scene seeds with ``root_seed`` (:func:`_scenes_from_maps`).
-
-    Raises:
-        CheckpointError: If the file is not a vgs checkpoint, is damaged, or does not fit, or
-            this host renders the replay's scenes differently from the host that wrote it.
-    """
-    tensors, meta = checkpoint.load(path, map_location=device)
-    try:
-        agent.load_state_dict({**meta["agent"], "eva_net": tensors["eva_net"],
-                               "target_net": tensors["target_net"],
-                               "optimizer": tensors["optimizer"]})
-        if replay is not None:
-            arrays = {k: None if v is None else v.cpu().numpy()
-                      for k, v in tensors["replay_arrays"].items()}
-            if replay.keeps_scenes and "scene" not in arrays and "color" in arrays:
-                arrays = _scenes_from_maps(path, arrays, replay, root_seed)
-            replay.load_state_dict({**meta["replay"], "arrays": arrays})
-            check = meta.get("replay_check")
-            if replay.keeps_scenes and check is not None and replay.render is not None:
-                if maps_digest(*replay.render(int(check["scene"]))) != check["sha256"]:
-                    raise CheckpointError(path, f"re-renders its replay heightmaps differently "
-                                                f"on this host (scene {check['scene']}), whose "
-                                                "MuJoCo, NumPy or vgs differs from the writer's; "
-                                                "resume it where it was written, or train again "
-                                                "into a new folder")
-        if monitor is not None:
-            monitor.load_state_dict(meta["monitor"])
-            torch.set_rng_state(tensors["torch_rng"].cpu())
-        return TrainState(int(meta["episode"]), meta["threshold"], meta["exploration_times"],
-                          meta["rng_state"], meta.get("table_sha256"))
-    except ConfigError as exc:
-        raise CheckpointError(path, f"does not fit this run ({exc})") from None
-    except (KeyError, TypeError, ValueError, AttributeError, RuntimeError) as exc:
-        raise CheckpointError(path, f"is incomplete ({type(exc).__name__}: {exc})") from None
-
-
-def _check_start(cfg: ExperimentConfig, mode: str, out: Path
-                 ) -> tuple[int, dict[str, Any] | None]:
-    """Check the request against ``run.json`` without writing anything.
-
-    Returns:
-        The number of episodes the epsilon schedule spans, and the ``run.json`` to write once
-        the rest of the folder has been checked (None when it stays as it is).
-    """
-    meta_path = out / "run.json"
-    here = host()
-    if meta_path.exists():
-        meta = read_json(meta_path)
-        if meta.get("mode") != mode:
-            raise RunMismatchError("mode", f"{out} holds a {meta.get('mode')} run, not {mode}")
-        if not isinstance(meta.get("config"), dict):
-            raise CorruptFileError(meta_path, "records no configuration")
-        grown = check_request(meta["config"], cfg, meta_path, extendable=("train.episodes",))
-        schedule = int(meta.get("schedule_episodes", meta["config"].get("train", {}).get(
-            "episodes", cfg.train.episodes)))
-        hosts = meta.get("hosts") if isinstance(meta.get("hosts"), list) else []
-        if not grown and here in hosts:
-            return schedule, None
-        meta.update(config=to_dict(cfg), schedule_episodes=schedule,
-                    hosts=hosts + ([here] if here not in hosts else []))
-        return schedule, meta
-    leftovers = [n for n in ("checkpoint.pt", "episodes.csv") if (out / n).exists()]
-    if leftovers:
-        raise CorruptFileError(meta_path, f"is missing but {out} holds {', '.join(leftovers)}; "
-                                          "restore it or train into a new folder")
-    return cfg.train.episodes, {"mode": mode, "config": to_dict(cfg),
-                                "schedule_episodes": cfg.train.episodes,
-                                "git_revision": git_revision(),
-                                "python": sys.version.split()[0], "torch": torch.__version__,
-                                "hosts": [here]}
 
 
 def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
@@ -408,7 +170,7 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
     total = cfg.train.episodes
     torch.set_num_threads(threads or max(1, min(4, os.cpu_count() or 1)))
     agent = GraspAgent(cfg.network, cfg.agent, device=device, seed=cfg.seed)
-    schedule, new_meta = _check_start(cfg, mode, out)
+    schedule, new_meta = check_start(cfg, mode, out)
     runner = EpisodeRunner(cfg)
     replay = ReplayBuffer(cfg.agent.replay_capacity, render=scene_renderer(runner),
                           cache_size=REPLAY_CACHE)
@@ -431,69 +193,13 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
     if new_meta is not None:
         write_json(out / "run.json", new_meta)
 
-    from torch.utils.tensorboard import SummaryWriter
-
-    writer = SummaryWriter(str(out / "tensorboard"), purge_step=state.episode)
-    csv_file, table = _open_csv(out / "episodes.csv", rows)
-    bar = tqdm(range(state.episode, total), initial=state.episode, total=total,
-               desc=f"train {mode}", disable=not progress, dynamic_ncols=True,
-                position=position)
-    recent: list[tuple[bool, float]] = []
-    recent_walls: list[float] = []
-    # Parallel episodes (train.parallel_episodes = K > 1): the grasps of K consecutive episodes
-    # are chosen with the same network, their physics runs in K worker processes, and the
-    # updates follow in episode order.
-    k_parallel = cfg.train.parallel_episodes
-    collector = (ProcessPoolExecutor(k_parallel, mp_context=mp.get_context("spawn"),
-                                     initializer=_init_collector, initargs=(cfg,))
-                 if k_parallel > 1 else None)
-    pending: dict[int, tuple[Any, int, float, GraspAction, Heightmap]] = {}
+    log = _TrainLog(out, rows, mode, state.episode, total, progress, position)
+    source = _EpisodeSource(cfg, agent, runner, rng, schedule)
     try:
-        for episode in bar:
+        for episode in log.bar:
             t0 = time.perf_counter()
-            if collector is None:
-                seed = episode_seed(cfg.seed, episode)
-                epsilon = agent.epsilon(episode, schedule)
-                chosen: dict[str, Any] = {}
-
-                def policy(hm: Heightmap, epsilon: float = epsilon,
-                           chosen: dict[str, Any] = chosen) -> GraspCommand:
-                    action = agent.act(hm.color, hm.depth, epsilon, peg_mask(hm.depth), rng,
-                                       skip_q_if_exploring=True)
-                    chosen["action"], chosen["hm"] = action, hm
-                    return action_to_command(action, hm)
-
-                record, _, _ = runner.run(seed, policy)
-                action, hm = chosen["action"], chosen["hm"]
-            else:
-                if episode not in pending:  # first episode of a batch: choose K grasps at once
-                    batch_end = min(episode - episode % k_parallel + k_parallel, total)
-                    for e in range(episode, batch_end):
-                        seed_e = episode_seed(cfg.seed, e)
-                        eps_e = agent.epsilon(e, schedule)
-                        hm_e = runner.observe(seed_e)
-                        act_e = agent.act(hm_e.color, hm_e.depth, eps_e, peg_mask(hm_e.depth),
-                                          rng, skip_q_if_exploring=True)
-                        pending[e] = (collector.submit(_run_command, seed_e,
-                                                       action_to_command(act_e, hm_e)),
-                                      seed_e, eps_e, act_e, hm_e)
-                future, seed, epsilon, action, hm = pending.pop(episode)
-                record = future.result()
-
-            # Reward (eq. 5). The threshold is the running percentile while exploring.
-            exploring = episode < cfg.agent.random_episodes
-            time_ok = record.assembly_time if record.success else None
-            derived = cfg.reward.threshold_s is None and (exploring or state.threshold is None)
-            state.threshold = next_threshold(state.exploration_times, state.threshold, time_ok,
-                                             exploring, cfg.reward)
-            if derived and (not exploring or episode == cfg.agent.random_episodes - 1):
-                write_json(out / "threshold.json",
-                           {"threshold_s": state.threshold, "n_times": len(state.exploration_times),
-                            "percentile": cfg.reward.threshold_percentile})
-            threshold = state.threshold if state.threshold is not None else math.inf
-            # Before any assembly time is known no threshold exists, so no r_AM can be earned.
-            r_grasp, r_asm = episode_reward(record.grasp_success, time_ok, state.threshold,
-                                            mode, cfg.reward)
+            record, seed, epsilon, action, hm = source.episode(episode)
+            r_grasp, r_asm, threshold = _reward(cfg, mode, state, record, episode, out)
             reward = r_grasp + r_asm
 
             # Learning: the executed pixel, then prioritised replays.
@@ -506,7 +212,7 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
 
             wall = time.perf_counter() - t0
             record_row = record.to_row()
-            row = {
+            log.episode({
                 "episode": episode, "mode": mode, "seed": seed, "epsilon": round(epsilon, 4),
                 "explored": bool(action.explored), "rotation": action.rotation,
                 "row": action.row, "col": action.col, "q_value": action.q_value,
@@ -514,31 +220,7 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
                 "r_grasp": r_grasp, "r_assembly": r_asm, "reward": reward,
                 "threshold_s": threshold if math.isfinite(threshold) else "",
                 "loss": stats["loss"], "delta_q": stats["delta_q"], "wall_s": round(wall, 3),
-            }
-            table.writerow(row)
-            csv_file.flush()
-            writer.add_scalar("charts/grasp_success", int(record.grasp_success), episode)
-            writer.add_scalar("charts/assembly_success", int(record.success), episode)
-            if record.success:
-                writer.add_scalar("charts/assembly_time_s", record.assembly_time, episode)
-                writer.add_scalar("charts/grasp_offset_abs_mm",
-                                  abs(record.grasp_offset) * 1000.0, episode)
-            writer.add_scalar("charts/epsilon", epsilon, episode)
-            writer.add_scalar("rewards/reward", reward, episode)
-            writer.add_scalar("rewards/r_assembly", r_asm, episode)
-            writer.add_scalar("losses/td_loss", stats["loss"], episode)
-            writer.add_scalar("losses/delta_q", stats["delta_q"], episode)
-            writer.add_scalar("losses/delta_q_window_mean", monitor.mean, episode)
-            writer.add_scalar("perf/episode_wall_s", wall, episode)
-
-            recent = (recent + [(record.grasp_success, record.assembly_time
-                                 if record.success else math.nan)])[-50:]
-            recent_walls = (recent_walls + [wall])[-50:]
-            times = [t for _, t in recent if math.isfinite(t)]
-            bar.set_postfix(grasp=f"{np.mean([g for g, _ in recent]):.2f}",
-                            T=f"{np.mean(times):.1f}" if times else "-",
-                            eps=f"{epsilon:.2f}", dQ=f"{stats['delta_q']:.3f}",
-                            loss=f"{stats['loss']:.3f}", conv=int(monitor.converged))
+            }, record, epsilon, reward, r_asm, stats, monitor, wall)
 
             state.episode = episode + 1
             if state.episode % cfg.train.checkpoint_every == 0 or state.episode == total:
@@ -546,24 +228,157 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
                 state.table_sha256 = _sha256((out / "episodes.csv").read_bytes())
                 save_checkpoint(ckpt, agent, replay, state, monitor)
                 if not progress:  # a line per checkpoint for logs of unattended runs
-                    print(f"train {mode} {out}: checkpoint at episode {state.episode}/{total}; "
-                          f"last {len(recent)}: grasp "
-                          f"{np.mean([g for g, _ in recent]):.2f}, assembly time "
-                          f"{np.mean(times) if times else math.nan:.1f} s, "
-                          f"{np.mean(recent_walls):.1f} s wall per episode", file=sys.stderr,
-                          flush=True)
+                    log.checkpoint_line(state.episode)
     finally:
-        csv_file.close()
-        writer.close()
-        if collector is not None:
-            collector.shutdown(cancel_futures=True)
+        log.close()
+        source.close()
     if cfg.reward.threshold_s is None and state.episode >= cfg.agent.random_episodes:
         # (the same content as written when the threshold froze: restores a damaged copy)
-        write_json(out / "threshold.json",
-                   {"threshold_s": state.threshold, "n_times": len(state.exploration_times),
-                    "percentile": cfg.reward.threshold_percentile})
+        write_json(out / "threshold.json", _threshold_doc(cfg, state))
     write_json(out / "convergence.json",
                {"delta_q_threshold": cfg.agent.delta_q_threshold,
                 "window": cfg.agent.delta_q_window, "converged": bool(monitor.converged),
                 "delta_q_window_mean": monitor.mean, "delta_q_window_max": monitor.max})
     return out
+
+
+class _EpisodeSource:
+    """The episodes' grasps and records, in episode order.
+
+    One at a time in this process; or, with ``train.parallel_episodes = K > 1``, the grasps of
+    K consecutive episodes chosen with the same network and their physics run in K worker
+    processes (the updates still follow in episode order).
+    """
+
+    def __init__(self, cfg: ExperimentConfig, agent: GraspAgent, runner: EpisodeRunner,
+                 rng: np.random.Generator, schedule: int) -> None:
+        self.cfg, self.agent, self.runner, self.rng = cfg, agent, runner, rng
+        self.schedule = schedule
+        self.k = cfg.train.parallel_episodes
+        self.collector = (ProcessPoolExecutor(self.k, mp_context=mp.get_context("spawn"),
+                                              initializer=_init_collector, initargs=(cfg,))
+                          if self.k > 1 else None)
+        self.pending: dict[int, tuple[Any, int, float, GraspAction, Heightmap]] = {}
+
+    def episode(self, episode: int
+                ) -> tuple[EpisodeRecord, int, float, GraspAction, Heightmap]:
+        """``(record, seed, epsilon, action, heightmap)`` of ``episode``."""
+        agent, rng = self.agent, self.rng
+        if self.collector is None:
+            seed = episode_seed(self.cfg.seed, episode)
+            epsilon = agent.epsilon(episode, self.schedule)
+            chosen: dict[str, Any] = {}
+
+            def policy(hm: Heightmap) -> GraspCommand:
+                action = agent.act(hm.color, hm.depth, epsilon, peg_mask(hm.depth), rng,
+                                   skip_q_if_exploring=True)
+                chosen["action"], chosen["hm"] = action, hm
+                return action_to_command(action, hm)
+
+            record, _, _ = self.runner.run(seed, policy)
+            return record, seed, epsilon, chosen["action"], chosen["hm"]
+        if episode not in self.pending:  # first episode of a batch: choose K grasps at once
+            total = self.cfg.train.episodes
+            batch_end = min(episode - episode % self.k + self.k, total)
+            for e in range(episode, batch_end):
+                seed_e = episode_seed(self.cfg.seed, e)
+                eps_e = agent.epsilon(e, self.schedule)
+                hm_e = self.runner.observe(seed_e)
+                act_e = agent.act(hm_e.color, hm_e.depth, eps_e, peg_mask(hm_e.depth), rng,
+                                  skip_q_if_exploring=True)
+                self.pending[e] = (self.collector.submit(_run_command, seed_e,
+                                                         action_to_command(act_e, hm_e)),
+                                   seed_e, eps_e, act_e, hm_e)
+        future, seed, epsilon, action, hm = self.pending.pop(episode)
+        return future.result(), seed, epsilon, action, hm
+
+    def close(self) -> None:
+        if self.collector is not None:
+            self.collector.shutdown(cancel_futures=True)
+
+
+def _threshold_doc(cfg: ExperimentConfig, state: TrainState) -> dict[str, Any]:
+    return {"threshold_s": state.threshold, "n_times": len(state.exploration_times),
+            "percentile": cfg.reward.threshold_percentile}
+
+
+def _reward(cfg: ExperimentConfig, mode: str, state: TrainState, record: EpisodeRecord,
+            episode: int, out: Path) -> tuple[float, float, float]:
+    """``(r_grasp, r_assembly, threshold)`` of an episode (eq. 5), the threshold the running
+    percentile while exploring (written to ``threshold.json`` when it freezes), inf before any
+    assembly time is known."""
+    exploring = episode < cfg.agent.random_episodes
+    time_ok = record.assembly_time if record.success else None
+    derived = cfg.reward.threshold_s is None and (exploring or state.threshold is None)
+    state.threshold = next_threshold(state.exploration_times, state.threshold, time_ok,
+                                     exploring, cfg.reward)
+    if derived and (not exploring or episode == cfg.agent.random_episodes - 1):
+        write_json(out / "threshold.json", _threshold_doc(cfg, state))
+    threshold = state.threshold if state.threshold is not None else math.inf
+    # Before any assembly time is known no threshold exists, so no r_AM can be earned.
+    r_grasp, r_asm = episode_reward(record.grasp_success, time_ok, state.threshold, mode,
+                                    cfg.reward)
+    return r_grasp, r_asm, threshold
+
+
+class _TrainLog:
+    """Where a training run reports: a row of ``episodes.csv`` per episode, TensorBoard scalars,
+    the progress bar, and a line per checkpoint when there is no bar."""
+
+    def __init__(self, out: Path, rows: list[str], mode: str, start: int, total: int,
+                 progress: bool, position: int) -> None:
+        from torch.utils.tensorboard import SummaryWriter
+
+        self.out, self.mode, self.total = out, mode, total
+        self.writer = SummaryWriter(str(out / "tensorboard"), purge_step=start)
+        self.csv_file, self.table = _open_csv(out / "episodes.csv", rows)
+        self.bar = tqdm(range(start, total), initial=start, total=total, desc=f"train {mode}",
+                        disable=not progress, dynamic_ncols=True, position=position)
+        self.recent: list[tuple[bool, float]] = []
+        self.recent_walls: list[float] = []
+
+    def episode(self, row: dict[str, Any], record: EpisodeRecord, epsilon: float,
+                reward: float, r_asm: float, stats: dict[str, float], monitor: DeltaQMonitor,
+                wall: float) -> None:
+        episode = row["episode"]
+        self.table.writerow(row)
+        self.csv_file.flush()
+        writer = self.writer
+        writer.add_scalar("charts/grasp_success", int(record.grasp_success), episode)
+        writer.add_scalar("charts/assembly_success", int(record.success), episode)
+        if record.success:
+            writer.add_scalar("charts/assembly_time_s", record.assembly_time, episode)
+            writer.add_scalar("charts/grasp_offset_abs_mm",
+                              abs(record.grasp_offset) * 1000.0, episode)
+        writer.add_scalar("charts/epsilon", epsilon, episode)
+        writer.add_scalar("rewards/reward", reward, episode)
+        writer.add_scalar("rewards/r_assembly", r_asm, episode)
+        writer.add_scalar("losses/td_loss", stats["loss"], episode)
+        writer.add_scalar("losses/delta_q", stats["delta_q"], episode)
+        writer.add_scalar("losses/delta_q_window_mean", monitor.mean, episode)
+        writer.add_scalar("perf/episode_wall_s", wall, episode)
+
+        self.recent = (self.recent + [(record.grasp_success, record.assembly_time
+                                       if record.success else math.nan)])[-50:]
+        self.recent_walls = (self.recent_walls + [wall])[-50:]
+        times = self._times()
+        self.bar.set_postfix(grasp=f"{np.mean([g for g, _ in self.recent]):.2f}",
+                             T=f"{np.mean(times):.1f}" if times else "-",
+                             eps=f"{epsilon:.2f}", dQ=f"{stats['delta_q']:.3f}",
+                             loss=f"{stats['loss']:.3f}", conv=int(monitor.converged))
+
+    def _times(self) -> list[float]:
+        return [t for _, t in self.recent if math.isfinite(t)]
+
+    def checkpoint_line(self, episode: int) -> None:
+        times = self._times()
+        print(f"train {self.mode} {self.out}: checkpoint at episode {episode}/{self.total}; "
+              f"last {len(self.recent)}: grasp "
+              f"{np.mean([g for g, _ in self.recent]):.2f}, assembly time "
+              f"{np.mean(times) if times else math.nan:.1f} s, "
+              f"{np.mean(self.recent_walls):.1f} s wall per episode", file=sys.stderr,
+              flush=True)
+
+    def close(self) -> None:
+        self.csv_file.close()
+        self.writer.close()

@@ -1,0 +1,367 @@
+"""The contact phases of the assembly (search, slide, align, insert) and the compliance they
+share: the admittance in contact, the peg's estimated axis and lower end, the measured moments
+and the grasp watch. :class:`ContactPhases` is a base of
+:class:`vgs.assembly.strategy.AssemblyModule`, whose docstring states every phase; the
+constants and the exceptions of the strategy live here.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+
+import numpy as np
+
+from vgs.control.transforms import exp_so3
+
+ROT_DAMPING = 2.5  # lower bound of the rotational admittance damping in contact [N m s/rad]
+
+
+CONTACT_DAMPING = 300.0  # lateral admittance damping in contact: 3x the servo-loop minimum [N s/m]
+
+
+ENTRY_DEPTH = 0.004  # descent below the three-point height that means "entered the hole" [m]
+
+
+SETTLE_TIME = 0.3  # still time before taring [s]
+
+
+LENGTH_TOLERANCE = 0.15  # the product data's length tolerance: the transport clears it
+
+
+LOST_WIDTH_FRACTION = 0.8  # finger width below this fraction of the diameter: peg lost
+
+
+RETRY_LIFT = 0.012  # lift before a new search [m]
+
+
+ROT_COMPLIANCE_ANGLE = math.radians(2.0)  # reference lead that loads the grasp to its limit
+
+
+SLIDE_FILTER_TIME = 0.1  # time constant of the lateral reaction filter in the slide [s]
+
+
+PROBE_TIME = 0.3  # pressing without lateral bias to read the edge's reaction [s]
+
+
+PROBE_FORCE = 0.5  # a lateral reaction above this gives the slide's direction [N]
+
+
+CATCH_TIME = 0.3  # the spiral held back this long: the rim is caught by the hole's edge [s]
+
+
+THREE_POINT_TIME = 0.3  # balanced and still this long: three-point contact [s]
+
+
+Z_FILTER_TIME = 0.1  # time constant of the TCP-height filter in the search [s]
+
+
+MAX_RETRIES = 3  # new searches after a wrong contact-state decision
+
+
+MAX_ALIGN_ADJUSTMENTS = 15  # adjustments in one alignment before it is judged lost
+
+
+MAX_INSERT_STALLS = 4  # consecutive stalled wiggles before the insertion is judged lost
+
+
+DROP_WINDOW = 3.0  # the drop is measured against the highest TCP height of this window [s]
+
+
+class Recovery(Exception):
+    """The contact state the controller believed in was wrong: lift and search again."""
+
+
+class PhaseTimeout(Exception):
+    """A phase ran past its timeout."""
+
+    def __init__(self, phase: str) -> None:
+        super().__init__(phase)
+        self.phase = phase
+
+
+class PegLost(Exception):
+    """The grasp watch saw the peg leave the pads (finger width or weight)."""
+
+
+class ContactPhases:
+    """The contact phases and their compliance helpers; the rest of the state machine (the
+    attributes these methods read, the phase clock ``_begin``/``_end``/``_check_timeout``) is
+    :class:`vgs.assembly.strategy.AssemblyModule`'s."""
+
+    def _check_grasp(self) -> None:
+        """Raise :class:`PegLost` when the fingers have closed past the peg (its nominal
+        diameter less a tolerance): the RG2's width reading, the robot's own signal."""
+        if self.robot.gripper.width() < LOST_WIDTH_FRACTION * self.peg.diameter:
+            raise PegLost
+
+    def _check_weight(self) -> None:
+        """In free air after the tare at the upright pose: a peg that fell out shows as an
+        upward force of its weight on the tared sensor."""
+        if self.robot.arm.wrench[2] > 0.5 * self.estimate.weight:
+            raise PegLost
+
+    def _down(self) -> np.ndarray:
+        """Estimated peg axis pointing down, from the commanded tool orientation."""
+        return self.estimate.down_sign * self.robot.arm.R_ref[:, 0]
+
+    def _tip(self) -> np.ndarray:
+        """Estimated centre of the peg's lower face, from the measured TCP pose."""
+        p, R = self.robot.arm.tcp_pose()
+        return p + self.estimate.hanging * self.estimate.down_sign * R[:, 0]
+
+    def _lowest_rim_offset(self, R_tcp: np.ndarray) -> np.ndarray:
+        """Vector from the lower face's centre to its lowest rim point for tool attitude R."""
+        axis = self.estimate.down_sign * R_tcp[:, 0]
+        v = np.array([0.0, 0.0, -1.0]) - np.dot([0.0, 0.0, -1.0], axis) * axis
+        n = np.linalg.norm(v)
+        return np.zeros(3) if n < 1e-9 else self.peg.radius * v / n
+
+    def _tilt_moment(self) -> float:
+        """Measured moment about the horizontal axes at the TCP [N m]: what tilts the peg in
+        the pads (about the pinch axis) or rocks it on them."""
+        w = self.robot.arm.wrench
+        return math.hypot(float(w[3]), float(w[4]))
+
+    def _moment(self) -> float:
+        """Measured moment about the pinch axis at the TCP (the pads) [N m]."""
+        return float(np.dot(self.robot.arm.wrench[3:], self.tilt_axis))
+
+    def _comply(self, lateral: float, lateral_damping: float | None = None,
+                z_damping: float | None = None,
+                k_rot: float | None = None) -> None:
+        """Admittance in contact.
+
+        Stiffness ``lateral`` in x and y, force control in z, and a rotational stiffness that
+        keeps the moment on the grasp below its capacity: a reference that runs
+        ``ROT_COMPLIANCE_ANGLE`` ahead of a jammed peg loads the pads with ``moment_limit``
+        (assembly.moment_limit_fraction of the grasp's capacity); ``k_rot`` overrides it.
+
+        Damping: a contact is a spring k_c on the peg; the discrete admittance loop at the
+        control period dt stays stable for D > k_c dt on every axis the contact loads
+        (the rule of :mod:`vgs.control.admittance`). Translation: at least
+        ``CONTACT_DAMPING`` laterally (``lateral_damping`` where larger: it sets the speed of a
+        force-controlled slide) and ``controller.force_damping`` in z (``z_damping`` where
+        larger). Rotation: the lower end in contact is a lateral spring at the lever h below
+        the pads, a rotational stiffness k_c h^2 about them (about 250 N m/rad for MuJoCo's
+        4 ms contacts on a 0.55 kg peg at h = 85 mm), so D >= ``ROT_DAMPING``.
+        """
+        if k_rot is None:
+            k_rot = self.moment_limit / ROT_COMPLIANCE_ANGLE
+        d_lat = CONTACT_DAMPING if lateral_damping is None else lateral_damping
+        d_z = self.robot.cfg.force_damping if z_damping is None else z_damping
+        self.robot.arm.admittance.set_stiffness(
+            np.array([lateral, lateral, 0.0, k_rot, k_rot, k_rot]),
+            damping=np.array([d_lat, d_lat, d_z, ROT_DAMPING, ROT_DAMPING, ROT_DAMPING]))
+
+    def _watch(self) -> None:
+        """Per-tick checks in contact: the finger width, and the peak measured moment."""
+        m = abs(self._moment())
+        if m > self.peak_moment:
+            self.peak_moment = m
+        self._check_grasp()
+
+    def search(self) -> None:
+        robot, cfg = self.robot, self.cfg
+        adm = robot.arm.admittance
+        adm.wrench_des[:] = [0.0, 0.0, -cfg.press_force, 0.0, 0.0, 0.0]
+        robot.arm.absorb_offset()
+        self._comply(cfg.search_stiffness)
+        center = robot.arm.p_ref[:2].copy()
+        theta = 0.0
+        b = cfg.spiral_pitch / (2 * math.pi)
+        # Sliding maximum of the filtered height over the last n_window ticks: a deque of
+        # (tick, height) with decreasing heights, so the maximum is its first entry.
+        window: deque[tuple[int, float]] = deque()
+        n_window = max(1, int(round(DROP_WINDOW / robot.dt)))
+        alpha = robot.dt / (Z_FILTER_TIME + robot.dt)
+        tcp_z = robot.cell.data.site_xpos[robot.cell.ids.tcp_site, 2:3]
+        z_f = float(tcp_z[0])
+        settle_ticks = int(round(SETTLE_TIME / robot.dt))
+        p_ref = robot.arm.p_ref.copy()
+        tick = 0
+        caught = 0
+        n_caught = max(1, int(round(CATCH_TIME / robot.dt)))
+        while True:
+            r = b * theta
+            if r > cfg.search_radius:
+                theta, r = 0.0, 0.0  # start the spiral again from its centre
+            # The spiral advances while the grasp carries less than the moment limit; held
+            # back by the hole's edge (the rim caught in it), it waits: loading the pads
+            # further would only turn the peg in them.
+            if self._tilt_moment() < self.moment_limit:
+                # d(theta)/dt = v / sqrt(r^2 + b^2): constant tangential speed.
+                theta += cfg.spiral_speed * robot.dt / math.hypot(r, b * 2)
+                caught = 0
+            else:
+                caught += 1
+            p_ref[2] = robot.arm.p_ref[2]
+            p_ref[0] = center[0] + r * math.cos(theta)
+            p_ref[1] = center[1] + r * math.sin(theta)
+            robot.arm.set_reference(p_ref, robot.arm.R_ref)
+            robot.tick()
+            self._watch()
+            # Low-pass filtered TCP height: the rubbing spiral's stick-slip makes it chatter.
+            z_f += alpha * (float(tcp_z[0]) - z_f)
+            while window and window[-1][1] <= z_f:
+                window.pop()
+            window.append((tick, z_f))
+            if window[0][0] <= tick - n_window:
+                window.popleft()
+            tick += 1
+            settle_ticks -= 1
+            # A drop below the recent height: the leading rim fell over the hole edge.
+            z_max = window[0][1]
+            if settle_ticks < 0 and (z_f < z_max - cfg.drop_threshold or caught >= n_caught):
+                # A drop, or the rim held by an edge: two-point contact.
+                self.detected_by = "drop" if z_f < z_max - cfg.drop_threshold else "caught"
+                self.z_search = z_max
+                break
+            self._check_timeout("search")
+
+    def slide(self) -> None:
+        """Two-point contact (Fig. 3a): pressing on, the lateral axes are force-controlled with
+        a bias towards the lowest rim point; the hole's reaction and the bias slide the peg
+        until the rim meets the far wall. Three-point contact (Fig. 2c) from the F/T signal:
+        the measured lateral force balances the bias (the wall pushes back) while the TCP
+        stands still."""
+        robot, cfg = self.robot, self.cfg
+        adm = robot.arm.admittance
+        robot.arm.absorb_offset()
+        lead = self.low_rim_from_tcp[:2] / max(np.linalg.norm(self.low_rim_from_tcp[:2]), 1e-9)
+        # Lateral damping for a free sliding speed of slide_speed under the bias.
+        self._comply(0.0, lateral_damping=cfg.three_point_force / cfg.slide_speed)
+        # Which way is the hole's centre (Fig. 3a): pressing with free lateral axes and no
+        # bias, the sum of the edge's reactions is the lateral force the sensor measures.
+        adm.wrench_des[:] = [0.0, 0.0, -cfg.slide_press_force, 0.0, 0.0, 0.0]
+        f_probe = np.zeros(2)
+        n_probe = max(1, int(round(PROBE_TIME / robot.dt)))
+        for _ in range(n_probe):
+            robot.tick()
+            self._watch()
+            f_probe += robot.arm.wrench[:2] / n_probe
+        if float(np.linalg.norm(f_probe)) > PROBE_FORCE:
+            lead = f_probe / float(np.linalg.norm(f_probe))
+        adm.wrench_des[:] = [*(cfg.three_point_force * lead), -cfg.slide_press_force, 0.0, 0.0, 0.0]
+        f_lat = np.zeros(2)
+        alpha = robot.dt / (SLIDE_FILTER_TIME + robot.dt)
+        window = max(1, int(round(THREE_POINT_TIME / robot.dt)))
+        start = robot.arm.tcp_pose()[0][:2]
+        last = start
+        z_low = robot.arm.tcp_height()
+        n = 0
+        while True:
+            robot.tick()
+            self._watch()
+            f_lat += alpha * (robot.arm.wrench[:2] - f_lat)
+            n += 1
+            # The rim cannot travel further than across the hole, nor climb back onto the
+            # surface, while it is in the hole: the drop was not the hole.
+            if (np.linalg.norm(robot.arm.tcp_pose()[0][:2] - start) > self.peg.diameter
+                    or robot.arm.tcp_height() > self.z_search + cfg.drop_threshold):
+                raise Recovery
+            z_low = min(z_low, robot.arm.tcp_height())
+            if n % window == 0:
+                now = robot.arm.tcp_pose()[0][:2]
+                moving = np.linalg.norm(now - last) > 0.25 * cfg.slide_speed * THREE_POINT_TIME
+                last = now
+                balanced = float(np.dot(f_lat, lead)) < -0.7 * cfg.three_point_force
+                if balanced and not moving:
+                    break
+            self._check_timeout("slide")
+        self.z_three = min(z_low, robot.arm.tcp_height())
+        if self.z_three > self.z_search - self.cfg.drop_threshold:
+            raise Recovery  # the peg is back on the surface: the drop was not the hole
+
+    def align(self) -> None:
+        """Wiggle alignment (Fig. 3c): each adjustment turns the peg back towards upright about
+        its estimated lower end and superposes one wiggle, each limited in moment: a rotation
+        stops early when the measured moment about the pinch axis reaches the moment limit."""
+        robot, cfg = self.robot, self.cfg
+        adm = robot.arm.admittance
+        amp = math.radians(cfg.wiggle_amplitude_deg)
+        # Lateral force control without bias: the hole guides the peg; press down only.
+        robot.arm.absorb_offset()
+        adm.wrench_des[:] = [0.0, 0.0, -cfg.press_force, 0.0, 0.0, 0.0]
+        self._comply(0.0)
+        n_wiggle = max(2, int(round(cfg.wiggle_period / robot.dt)))
+        start_adjustments = self.adjustments
+        while True:
+            if self.adjustments - start_adjustments >= MAX_ALIGN_ADJUSTMENTS:
+                raise Recovery
+            robot.arm.absorb_offset()
+            tilt = self._commanded_tilt()
+            moment = self._moment()
+            # Rotate back towards upright: the commanded tilt, corrected by the measured moment
+            # (a contact moment about the pinch axis says the peg bears on one side).
+            step = -tilt + cfg.align_gain * moment
+            step = max(-math.radians(3.0), min(math.radians(3.0), step))
+            self._rotate_about_tip(step, n_wiggle // 2)
+            # One wiggle: +amp, -amp, back, about the estimated lower end.
+            for sgn in (1.0, -2.0, 1.0):
+                self._rotate_about_tip(sgn * amp, n_wiggle // 4)
+            self.adjustments += 1
+            z = robot.arm.tcp_pose()[0][2]
+            # Aligned: the peg slid into the hole (which a tilt much above delta forbids) and
+            # the contact moment has relaxed.
+            if z < self.z_three - ENTRY_DEPTH and abs(self._moment()) < self.aligned_moment:
+                return
+            self._check_timeout("align")
+
+    def _commanded_tilt(self) -> float:
+        """Signed angle of the commanded peg axis from vertical, about the tilt axis."""
+        down = self._down()
+        return math.atan2(float(np.dot(np.cross([0.0, 0.0, -1.0], down), self.tilt_axis)),
+                          float(-down[2]))
+
+    def _rotate_about_tip(self, angle: float, n_ticks: int) -> None:
+        """Turn the reference by ``angle`` about the pinch axis around the estimated lower end
+        (smoothstep profile); stop where the measured moment opposes the turn beyond the
+        moment limit (the rotation would only load the grasp)."""
+        robot = self.robot
+        p0, R0 = robot.arm.p_ref.copy(), robot.arm.R_ref.copy()
+        tip = p0 + self.estimate.hanging * self.estimate.down_sign * R0[:, 0]
+        n = max(1, n_ticks)
+        sign = 1.0 if angle >= 0 else -1.0
+        for k in range(1, n + 1):
+            s = k / n
+            s = s * s * (3 - 2 * s)
+            Rk = exp_so3(s * angle * self.tilt_axis)
+            robot.arm.set_reference(tip + Rk @ (p0 - tip), Rk @ R0)
+            robot.tick()
+            self._watch()
+            if -sign * self._moment() > self.moment_limit:
+                return
+
+    def insert(self) -> None:
+        robot, cfg = self.robot, self.cfg
+        adm = robot.arm.admittance
+        robot.arm.absorb_offset()
+        adm.wrench_des[:] = [0.0, 0.0, -cfg.press_force, 0.0, 0.0, 0.0]
+        # Compliance in the lateral axes and in rotation lets the hole guide the peg.
+        self._comply(cfg.insert_stiffness)
+        z_target = self.z_contact - self.cfg.insertion_depth - 0.003
+        last_z = robot.arm.tcp_pose()[0][2]
+        n_wiggle = max(2, int(round(cfg.wiggle_period / robot.dt)))
+        amp = math.radians(cfg.wiggle_amplitude_deg)
+        stalls = 0
+        check = max(1, int(round(0.25 / robot.dt)))
+        while robot.arm.tcp_pose()[0][2] > z_target:
+            for _ in range(check):
+                robot.tick()
+                self._watch()
+            z = robot.arm.tcp_pose()[0][2]
+            if last_z - z < 0.25 * cfg.insert_speed * 0.25 * check * robot.dt / 0.25:
+                # Stalled (jammed): one more wiggle adjustment; several in a row mean the peg
+                # is not in the hole at all (a wrong contact-state decision).
+                stalls += 1
+                if stalls > MAX_INSERT_STALLS:
+                    raise Recovery
+                for sgn in (1.0, -2.0, 1.0):
+                    self._rotate_about_tip(sgn * amp, n_wiggle // 4)
+                self.adjustments += 1
+            else:
+                stalls = 0
+            last_z = z
+            self._check_timeout("insert")
+        self._check_grasp()

@@ -1,0 +1,283 @@
+"""The parser of the ``vgs`` command, one sub-parser a command with only the flags it uses, and
+:func:`main`: one-line errors with exit code 2, Ctrl-C with exit code 130."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from collections.abc import Sequence
+
+from vgs.cli.folders import (
+    cmd_curves,
+    cmd_export_policy,
+    cmd_heatmap,
+    cmd_report,
+    cmd_seeds,
+    cmd_status,
+)
+from vgs.cli.options import (
+    UsageError,
+    _Parser,
+    config_from_args,
+    seed_arg,
+)
+from vgs.cli.runs import (
+    cmd_config,
+    cmd_demo,
+    cmd_evaluate,
+    cmd_export_scene,
+    cmd_model_info,
+    cmd_reproduce,
+    cmd_sweep,
+    cmd_train,
+)
+from vgs.config import CONDITIONS
+from vgs.errors import VGSError
+
+
+def _config_flags(p: argparse.ArgumentParser, sections: tuple[str, ...] = ()) -> None:
+    """Give a command that builds its configuration from a profile ``--profile`` and ``--set``;
+    with ``sections`` (the command reads only those) ``--set`` takes only their keys, without
+    them the command also takes the cell's override flags (``--peg-mass`` ...)."""
+    p.add_argument("--profile", default="paper",
+                   help="configuration profile: smoke, quick, medium or paper "
+                        "(default: paper; the cell is the same in all profiles)")
+    group = p.add_argument_group("configuration overrides (SI units; vgs config lists every key)")
+    if not sections:
+        group.add_argument("--peg-mass", type=float, help="peg mass [kg] (cell.peg.mass)")
+        group.add_argument("--peg-length", type=float, help="peg length [m] (cell.peg.length)")
+        group.add_argument("--peg-diameter", type=float,
+                           help="peg diameter [m] (cell.peg.diameter); the hole stays made for "
+                                "the nominal 30 mm peg")
+        group.add_argument("--clearance", type=float,
+                           help="diametral clearance [m] (cell.hole.clearance)")
+        group.add_argument("--hole-depth", type=float, help="hole depth [m] (cell.hole.depth)")
+        group.add_argument("--gripper-force", type=float,
+                           help="RG2 gripping force, 3-40 N (cell.gripper.force)")
+    which = (" or ".join(f"{name}.*" for name in sections) + " field") if sections else "field"
+    example = "network.num_rotations=8" if sections == ("network",) else "assembly.press_force=12"
+    group.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                       help=f"any {which} by dotted path, e.g. --set {example} (repeatable; "
+                            "the value is a Python literal or a string)")
+    p.set_defaults(config_sections=sections)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``vgs`` argument parser with its subcommands."""
+    parser = _Parser(prog="vgs", description="Visual grasping strategy for peg-in-hole "
+                                             "assembly (UR5 + RG2 in MuJoCo).")
+    from vgs import __version__
+
+    parser.add_argument("--version", action="version", version=f"vgs {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    demo = sub.add_parser("demo", help="one whole episode with a figure")
+    _config_flags(demo)
+    demo.add_argument("--seed", type=seed_arg, help="episode seed (default: the profile's seed)")
+    demo.add_argument("--json", action="store_true",
+                      help="print only the episode record as JSON on stdout")
+    demo.add_argument("--out", default="runs/demo",
+                      help="folder of demo.png (default: %(default)s)")
+    demo.add_argument("--offset", type=float, default=0.0, metavar="MM",
+                      help="grasp offset from the visible peg centre along its axis [mm] "
+                           "(default: 0, the centre heuristic)")
+    demo.add_argument("--video", metavar="FILE",
+                      help="also render the episode from the perspective camera to FILE (.mp4 "
+                           "or .gif), phase and F/T reading on every frame; needs OpenGL "
+                           "(headless: MUJOCO_GL=egl, the default without a display)")
+    demo.add_argument("--video-fps", type=float, default=15.0,
+                      help="video frames per second (default: %(default)s)")
+    demo.add_argument("--video-speed", type=float, default=4.0,
+                      help="simulated seconds per second of video (default: %(default)s)")
+    demo.add_argument("--video-size", default="480x360", metavar="WxH",
+                      help="frame size in pixels (default: %(default)s)")
+    demo.set_defaults(func=cmd_demo)
+
+    sweep = sub.add_parser("sweep", help="assembly time against the grasp offset")
+    _config_flags(sweep)
+    sweep.add_argument("--offsets", type=int, default=9,
+                       help="number of offsets over +-(L/2 - 15 mm) (default: %(default)s)")
+    sweep.add_argument("--offsets-mm", metavar="A,B,...",
+                       help="explicit offsets [mm], comma-separated (overrides --offsets); write "
+                            "--offsets-mm=-20,0,20 when the first is negative")
+    sweep.add_argument("--trials", type=int, default=20, help="trials per offset")
+    sweep.add_argument("--out", default="runs/sweep", help="output folder (default: %(default)s)")
+    sweep.add_argument("--mass-range", type=float, default=0.0,
+                       help="peg mass factor uniform in 1 +- this (default: 0)")
+    sweep.add_argument("--length-range", type=float, default=0.0,
+                       help="peg length factor uniform in 1 +- this; the mass follows the "
+                            "volume (default: 0)")
+    sweep.add_argument("--seed", type=seed_arg, help="root seed (default: the profile's seed)")
+    sweep.add_argument("--workers", type=int,
+                       help="worker processes (default: the number of CPU cores)")
+    sweep.add_argument("--no-progress", action="store_true", help="no progress bar")
+    sweep.set_defaults(func=cmd_sweep)
+
+    scene = sub.add_parser("export-scene",
+                           help="write the cell as MJCF, ready to open in MuJoCo's viewer")
+    _config_flags(scene)
+    scene.add_argument("--out", default="scene.xml", help="MJCF file (default: %(default)s)")
+    scene.add_argument("--seed", type=seed_arg, default=0,
+                       help="reset seed of the written default state: peg pose, hole position "
+                            "(default: 0)")
+    scene.set_defaults(func=cmd_export_scene)
+
+    export_pol = sub.add_parser("export-policy",
+                                help="a training run's network as plain weights (torch.load "
+                                     "weights_only) plus a JSON description")
+    export_pol.add_argument("run_dir", metavar="RUN", help="a training run folder")
+    export_pol.add_argument("--out", required=True,
+                            help="weights file (.pt); the description goes beside it (.json). "
+                                 "A folder (no suffix) gets policy.pt, policy.json and run.json: "
+                                 "a policy folder vgs evaluate --policy loads")
+    export_pol.set_defaults(func=cmd_export_policy)
+
+    info = sub.add_parser("model-info",
+                          help="parameter counts and tensor shapes of the grasp network")
+    _config_flags(info, sections=("network",))
+    info.add_argument("--backbone", help="densenet121 or light (default: the profile's)")
+    info.add_argument("--rotations", type=int, help="number of grasp rotations R")
+    info.add_argument("--rotate", help="input or features (default: the profile's)")
+    info.add_argument("--size", type=int, default=224, help="heightmap side [px]")
+    info.add_argument("--json", action="store_true", help="print JSON")
+    info.set_defaults(func=cmd_model_info)
+
+    train = sub.add_parser("train",
+                           help="train the grasp policy (vgs or baseline); resumes from --out")
+    _config_flags(train)
+    train.add_argument("--mode", required=True, choices=("vgs", "baseline"),
+                       help="vgs: grasp + assembly reward; baseline: grasp reward only")
+    train.add_argument("--out", required=True, help="run folder (started again: resumes)")
+    train.add_argument("--episodes", type=int, help="episodes in all (default: the profile's)")
+    train.add_argument("--backbone", help="densenet121 or light (default: the profile's)")
+    train.add_argument("--seed", type=seed_arg, help="root seed (default: the profile's)")
+    train.add_argument("--device", help="cpu, cuda or auto (default: the profile's)")
+    train.add_argument("--no-progress", action="store_true", help="no progress bar")
+    train.set_defaults(func=cmd_train)
+
+    heat = sub.add_parser("heatmap", help="Q heat maps of a run, untrained beside trained "
+                                          "(Fig. 7), with the run's own configuration")
+    heat.add_argument("run_dir", help="a training run folder")
+    heat.add_argument("--out", required=True, help="figure file (PNG)")
+    heat.add_argument("--scenes", type=int, default=2, help="scenes, one per row")
+    heat.set_defaults(func=cmd_heatmap)
+
+    curves = sub.add_parser("curves",
+                            help="learning curves of runs and where each policy grasps")
+    curves.add_argument("runs", nargs="+", help="training run folders")
+    curves.add_argument("--out", required=True, help="figure file (PNG)")
+    curves.add_argument("--window", type=int, default=20, help="moving-mean window [episodes]")
+    curves.add_argument("--json", action="store_true", help="print the summary as JSON")
+    curves.set_defaults(func=cmd_curves)
+
+    evaluate = sub.add_parser("evaluate",
+                              help="test one policy on one condition (parallel, resumable)")
+    _config_flags(evaluate)
+    evaluate.add_argument("--policy", required=True,
+                          help="a training run folder, random, center, or module:function")
+    evaluate.add_argument("--condition", default="nominal", choices=CONDITIONS,
+                          help="nominal peg, mass +-15 %%, or length 85-115 %% with the mass "
+                               "following (default: %(default)s)")
+    evaluate.add_argument("--episodes", type=int,
+                          help="test episodes (default: the profile's eval.episodes)")
+    evaluate.add_argument("--seed", type=seed_arg,
+                          help="root seed of the test scenes (default: reproduce.eval_seed)")
+    _parallel_flags(evaluate)
+    evaluate.add_argument("--out", required=True, help="output folder (started again: resumes)")
+    evaluate.add_argument("--json", action="store_true", help="print the summary as JSON")
+    evaluate.set_defaults(func=cmd_evaluate)
+
+    repro = sub.add_parser("reproduce",
+                           help="the paper's experiments: train, evaluate, sweep, report")
+    _config_flags(repro)
+    repro.add_argument("--out", required=True, help="output folder (started again: resumes)")
+    repro.add_argument("--stages", default="train,evaluate,sweep,report",
+                       help="comma-separated stages to run, in pipeline order whatever the "
+                            "order given (default: %(default)s)")
+    _parallel_flags(repro)
+    repro.set_defaults(func=cmd_reproduce)
+
+    report = sub.add_parser("report",
+                            help="write DIR/report.md and DIR/report.html from DIR's results")
+    report.add_argument("dir", help="a reproduce folder (with eval/<policy>/<condition>/)")
+    report.add_argument("--publish", metavar="DEST",
+                        help="also copy the small result files (report, figures, tables; no "
+                             "checkpoints) and each finished run's final network "
+                             "(DEST/<mode>/policy.pt) to DEST, e.g. docs/results/quick")
+    report.add_argument("--title", help="the report's title (default: VGS reproduction report)")
+    report.set_defaults(func=cmd_report)
+
+    seeds = sub.add_parser("seeds", help="VGS against the baseline per training seed and on "
+                                         "average, from several results folders")
+    seeds.add_argument("dirs", nargs="+", metavar="DIR",
+                       help="reproduce folders or their published copies (docs/results/...), "
+                            "each with eval/<policy>/<condition>/episodes.parquet")
+    seeds.add_argument("--out", required=True,
+                       help="folder of seeds.md, seeds.csv and seeds.png")
+    seeds.set_defaults(func=cmd_seeds)
+
+    status = sub.add_parser("status", help="how far a reproduction, training run or evaluation "
+                                           "folder has got (safe while it runs)")
+    status.add_argument("dir", help="a reproduce, train or evaluate output folder")
+    status.set_defaults(func=cmd_status)
+
+    config = sub.add_parser("config", help="the resolved configuration: every key --set takes, "
+                                           "its value and what it means")
+    _config_flags(config)
+    config.add_argument("--json", action="store_true",
+                        help="print a JSON list of {key, value, doc} with each doc whole")
+    config.set_defaults(func=cmd_config)
+    return parser
+
+
+def _parallel_flags(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--workers", type=int,
+                   help="parallel worker processes (default: the number of CPU cores)")
+    p.add_argument("--backend", default="local", choices=("local", "ray"),
+                   help="local processes or Ray (pip install 'vgs[ray]') (default: local)")
+    p.add_argument("--ray-address", help="address of a running Ray cluster (default: start a "
+                                         "local one)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ``vgs`` command; return its exit code.
+
+    Args:
+        argv: Arguments without the program name (default: ``sys.argv[1:]``).
+    """
+    args = None
+    try:
+        args, extra = build_parser().parse_known_args(argv)
+        if extra:  # a flag another command takes, or one no command does
+            raise UsageError(f"{args.command}: does not take {' '.join(extra)} (vgs "
+                             f"{args.command} --help lists what it takes)")
+        cfg = config_from_args(args) if hasattr(args, "profile") else None
+        return args.func(args, cfg)
+    except VGSError as exc:
+        return _error(str(exc))
+    except OSError as exc:
+        if isinstance(exc, BrokenPipeError):
+            # The reader of stdout went away (e.g. `vgs model-info | head`): stop quietly.
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return 1
+        # A file or folder the command cannot use: an --out that is a file, a full disk, no
+        # permission. The run's files are as the last completed write left them.
+        where = f"{exc.filename}: " if exc.filename else ""
+        return _error(f"{where}{exc.strerror or exc}")
+    except KeyboardInterrupt:
+        command = getattr(args, "command", None)
+        again = ("; run the same command again to resume (finished episodes are kept)"
+                 if command in RESUMABLE else "")
+        print(f"vgs: interrupted{again}", file=sys.stderr)
+        return 130
+
+
+RESUMABLE = ("train", "evaluate", "reproduce")
+
+
+def _error(message: str) -> int:
+    message = " ".join(message.split())
+    print(f"vgs: error: {message}", file=sys.stderr)
+    return 2

@@ -1,0 +1,54 @@
+"""Typed, frozen configuration of every component, nested into one :class:`ExperimentConfig`.
+
+Units are SI throughout (metres, kilograms, seconds, newtons, radians) unless a field name says
+otherwise (``*_mm``, ``*_deg``). Every dataclass validates itself in ``__post_init__`` and raises
+:class:`vgs.errors.ConfigError` naming the offending field, so bad input never reaches the physics.
+
+Named profiles (:data:`PROFILES`): ``smoke`` (seconds, for tests), ``quick`` (minutes on a 2-core
+CPU), ``medium`` (1.5-2 hours there) and ``paper`` (the paper's budget: 5000 training grasps,
+1000 test assemblies).
+
+The package's modules follow what they configure: :mod:`vgs.config.cell` (peg, hole, gripper,
+force-torque sensor, camera, simulation), :mod:`vgs.config.control` (controller, assembly),
+:mod:`vgs.config.learning` (network, agent, reward, training), :mod:`vgs.config.experiment`
+(evaluation, reproduction, :class:`ExperimentConfig`, the profiles) and :mod:`vgs.config.tree`
+(``override``, ``to_dict``, ``from_dict``, ``same_config``). Import the names from
+:mod:`vgs.config` itself.
+"""
+
+from vgs.config.cell import (
+    CameraConfig,
+    CellConfig,
+    FTSensorConfig,
+    GripperConfig,
+    HoleConfig,
+    PegConfig,
+    SimConfig,
+)
+from vgs.config.control import AssemblyConfig, ControllerConfig
+from vgs.config.experiment import (
+    CONDITIONS,
+    PROFILES,
+    EvalConfig,
+    ExperimentConfig,
+    ReproduceConfig,
+    profile,
+)
+from vgs.config.learning import (
+    BACKBONES,
+    PRECISIONS,
+    ROTATE_MODES,
+    AgentConfig,
+    NetworkConfig,
+    RewardConfig,
+    TrainConfig,
+)
+from vgs.config.tree import NO_SUCH_FIELD, from_dict, override, same_config, to_dict
+
+__all__ = [
+    "BACKBONES", "CONDITIONS", "NO_SUCH_FIELD", "PRECISIONS", "PROFILES", "ROTATE_MODES",
+    "AgentConfig", "AssemblyConfig", "CameraConfig", "CellConfig", "ControllerConfig",
+    "EvalConfig", "ExperimentConfig", "FTSensorConfig", "GripperConfig", "HoleConfig",
+    "NetworkConfig", "PegConfig", "ReproduceConfig", "RewardConfig", "SimConfig", "TrainConfig",
+    "from_dict", "override", "profile", "same_config", "to_dict",
+]

@@ -1,0 +1,162 @@
+"""Configuration of an experiment: evaluation, reproduction, the whole tree, the profiles."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from vgs.config.cell import CellConfig
+from vgs.config.checks import _fraction
+from vgs.config.control import AssemblyConfig, ControllerConfig
+from vgs.config.learning import AgentConfig, NetworkConfig, RewardConfig, TrainConfig
+from vgs.errors import ConfigError
+
+# The test conditions (paper 4.2), the one list: the evaluation draws each peg
+# (vgs.experiments.evaluate.condition_peg), reproduce.conditions and vgs evaluate --condition
+# take these names, the report titles them (vgs.experiments.reportfigures.CONDITION_TITLES).
+CONDITIONS = ("nominal", "mass", "length")
+
+
+@dataclass(frozen=True)
+class EvalConfig:
+    """Evaluation: the test episodes of one policy on one condition (paper 4.2).
+
+    Attributes:
+        episodes: Test episodes per policy and condition (paper: 1000).
+        mass_range: The ``mass`` condition's peg mass factor is uniform in 1 +- this.
+        length_range: The ``length`` condition's peg length factor is uniform in 1 +- this; the
+            mass follows the length.
+    """
+
+    episodes: int = 1000
+    mass_range: float = 0.15
+    length_range: float = 0.15
+
+    def __post_init__(self) -> None:
+        if self.episodes < 1:
+            raise ConfigError("eval.episodes", "must be >= 1")
+        _fraction(self, "mass_range", "length_range", prefix="eval.")
+
+
+@dataclass(frozen=True)
+class ReproduceConfig:
+    """What ``vgs reproduce`` runs besides one training per mode and the evaluations.
+
+    Attributes:
+        train_seeds: Root seeds of the training runs; each seed trains the baseline and VGS
+            (the paper reports one run per method).
+        conditions: Test conditions (``nominal``, ``mass``, ``length``; paper 4.2).
+        reference_policies: Extra heuristic policies evaluated beside the learned ones
+            (``center``, ``random``).
+        sweep_offsets: Grasp offsets of the grasp-position sweep (0: no sweep).
+        sweep_trials: Trials per offset of the sweep.
+        eval_seed: Root seed of the test episodes (the same scenes for every policy).
+    """
+
+    train_seeds: tuple[int, ...] = (0,)
+    conditions: tuple[str, ...] = CONDITIONS
+    reference_policies: tuple[str, ...] = ("center",)
+    sweep_offsets: int = 9
+    sweep_trials: int = 20
+    eval_seed: int = 2023
+
+    def __post_init__(self) -> None:
+        if not self.train_seeds:
+            raise ConfigError("reproduce.train_seeds", "need at least one seed")
+        bad = [c for c in self.conditions if c not in CONDITIONS]
+        if bad or not self.conditions:
+            raise ConfigError("reproduce.conditions",
+                              f"must be a non-empty subset of {', '.join(CONDITIONS)}; got {bad}")
+        bad = [p for p in self.reference_policies if p not in ("center", "random")]
+        if bad:
+            raise ConfigError("reproduce.reference_policies",
+                              f"must be center and/or random, got {bad}")
+        if self.sweep_offsets < 0 or self.sweep_trials < 1:
+            raise ConfigError("reproduce.sweep_offsets", "offsets >= 0 and trials >= 1")
+
+
+@dataclass(frozen=True)
+class ExperimentConfig:
+    """Everything one experiment needs.
+
+    Attributes:
+        name: Profile name, recorded in ``reproduce.json`` and a sweep's ``summary.json`` and
+            shown in a reproduction report's title.
+        seed: Root seed of a training run (network initialisation, exploration, episode scenes)
+            and the default seed of ``vgs demo`` and ``vgs sweep``; ``vgs reproduce`` trains
+            with each of ``reproduce.train_seeds`` instead.
+    """
+
+    name: str = "paper"
+    seed: int = 0
+    cell: CellConfig = field(default_factory=CellConfig)
+    controller: ControllerConfig = field(default_factory=ControllerConfig)
+    assembly: AssemblyConfig = field(default_factory=AssemblyConfig)
+    network: NetworkConfig = field(default_factory=NetworkConfig)
+    agent: AgentConfig = field(default_factory=AgentConfig)
+    reward: RewardConfig = field(default_factory=RewardConfig)
+    train: TrainConfig = field(default_factory=TrainConfig)
+    eval: EvalConfig = field(default_factory=EvalConfig)
+    reproduce: ReproduceConfig = field(default_factory=ReproduceConfig)
+
+
+def _paper() -> ExperimentConfig:
+    return ExperimentConfig(name="paper")
+
+
+def _quick() -> ExperimentConfig:
+    # Sized to finish `vgs reproduce --profile quick` within 15 minutes on a 2-core CPU:
+    # 2 x 80 training episodes side by side, 3 policies x 3 conditions x 12 test episodes, a
+    # 5 x 3 sweep. Far too small to learn the grasp position; it shows the whole pipeline.
+    return ExperimentConfig(
+        name="quick",
+        network=NetworkConfig(backbone="light", num_rotations=8),
+        agent=AgentConfig(random_episodes=30, target_update_period=10, delta_q_window=20),
+        train=TrainConfig(episodes=80, checkpoint_every=10),
+        eval=EvalConfig(episodes=12),
+        reproduce=ReproduceConfig(sweep_offsets=5, sweep_trials=3),
+    )
+
+
+def _medium() -> ExperimentConfig:
+    # Sized to fit `vgs reproduce --profile medium` into one working session (1.5-2 h) on a
+    # 2-core CPU, 15x the quick profile's training and 20x its tests: 2 x 1200 training episodes
+    # side by side (the first 240 random: the paper's 20 %), 3 policies x 3 conditions x 250
+    # test episodes, no sweep (the sweep has its own command). The light backbone at the quick
+    # profile's R = 8 keeps the network's share of the time small; the simulation is the rest.
+    return ExperimentConfig(
+        name="medium",
+        network=NetworkConfig(backbone="light", num_rotations=8),
+        agent=AgentConfig(random_episodes=240, target_update_period=25, delta_q_window=50),
+        train=TrainConfig(episodes=1200, checkpoint_every=25),
+        eval=EvalConfig(episodes=250),
+        reproduce=ReproduceConfig(sweep_offsets=0),
+    )
+
+
+def _smoke() -> ExperimentConfig:
+    return ExperimentConfig(
+        name="smoke",
+        network=NetworkConfig(backbone="light", num_rotations=4),
+        agent=AgentConfig(random_episodes=2, target_update_period=2, delta_q_window=2,
+                          replay_capacity=64),
+        train=TrainConfig(episodes=4, checkpoint_every=2),
+        eval=EvalConfig(episodes=4),
+        reproduce=ReproduceConfig(sweep_offsets=3, sweep_trials=1),
+    )
+
+
+PROFILES = {"smoke": _smoke, "quick": _quick, "medium": _medium, "paper": _paper}
+
+
+def profile(name: str) -> ExperimentConfig:
+    """Return the named profile.
+
+    Raises:
+        ConfigError: If the profile is unknown.
+    """
+    try:
+        return PROFILES[name]()
+    except KeyError:
+        raise ConfigError(
+            "profile", f"unknown profile {name!r}; choose from {sorted(PROFILES)}"
+        ) from None

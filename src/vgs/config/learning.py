@@ -1,0 +1,164 @@
+"""Configuration of grasp learning: network, agent, reward, training."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from vgs.config.checks import _fraction, _non_negative, _positive
+from vgs.errors import ConfigError
+
+BACKBONES = ("densenet121", "light")
+ROTATE_MODES = ("input", "features")
+PRECISIONS = ("float32", "bfloat16")
+
+
+@dataclass(frozen=True)
+class NetworkConfig:
+    """Fully convolutional grasp Q network (paper 3.1).
+
+    Attributes:
+        backbone: ``densenet121`` (paper) or ``light`` (fast CPU runs).
+        num_rotations: Number of grasp orientations R over 360 degrees, theta_k = 2 pi k / R
+            (k and k + R/2 are the same two-finger grasp).
+        weights: Optional path of a local weights file for the trunks.
+        rotate: ``input`` (rotate the heightmap R times before the trunks, as VPG and the paper
+            do) or ``features`` (trunks run once, orientation handled after them; about 14x
+            faster decisions with DenseNet-121 on a CPU, see docs/grasping.md; not in the paper).
+        depth_mean: Mean subtracted from the depth heightmap [m].
+        depth_std: Scale dividing the depth heightmap [m].
+        precision: ``float32`` (default) or ``bfloat16``: the forward passes (decisions, TD
+            targets, updates) under ``torch.autocast`` in bfloat16, weights, optimiser and loss
+            in float32. About 3x faster DenseNet-121 decisions on a CPU with AMX or
+            AVX512-BF16 (docs/grasping.md); Q values agree with float32 within bfloat16
+            rounding. A compute setting, not part of the architecture: a checkpoint loads
+            under either.
+    """
+
+    backbone: str = "densenet121"
+    num_rotations: int = 16
+    weights: str | None = None
+    rotate: str = "input"
+    depth_mean: float = 0.01
+    depth_std: float = 0.03
+    precision: str = "float32"
+
+    def __post_init__(self) -> None:
+        if self.backbone not in BACKBONES:
+            raise ConfigError("network.backbone",
+                              f"must be one of {BACKBONES}, got {self.backbone!r}")
+        if self.num_rotations < 1:
+            raise ConfigError("network.num_rotations", "must be >= 1")
+        if self.rotate not in ROTATE_MODES:
+            raise ConfigError("network.rotate",
+                              f"must be one of {ROTATE_MODES}, got {self.rotate!r}")
+        if self.precision not in PRECISIONS:
+            raise ConfigError("network.precision",
+                              f"must be one of {PRECISIONS}, got {self.precision!r}")
+        _positive(self, "depth_std", prefix="network.")
+
+
+@dataclass(frozen=True)
+class AgentConfig:
+    """DQN agent (paper eq. 4-11).
+
+    Attributes:
+        learning_rate: SGD learning rate (paper: 1e-4).
+        momentum: SGD momentum (paper: 0.9).
+        weight_decay: L2 weight decay.
+        gamma: Future discount (paper: 0.5); unused by vgs train, whose grasps are terminal
+            one-step episodes (target y = R).
+        epsilon_start: Initial exploration rate (paper: 0.5).
+        epsilon_end: Final exploration rate (paper: 0.1).
+        random_episodes: Grasps chosen at random before the greedy phase (paper: 1000).
+        target_update_period: Updates between copies of the evaluation into the target network
+            (which vgs train never reads: its target is y = R).
+        replay_capacity: Stored transitions.
+        replay_batch: Extra prioritised replays per episode.
+        delta_q_threshold: Convergence threshold on Delta Q = |y - Q_eva| (eq. 10; |R - Q_eva|
+            in training): the largest in the window must be below it.
+        delta_q_window: Episodes over which Delta Q must stay under the threshold.
+    """
+
+    learning_rate: float = 1e-4
+    momentum: float = 0.9
+    weight_decay: float = 2e-5
+    gamma: float = 0.5
+    epsilon_start: float = 0.5
+    epsilon_end: float = 0.1
+    random_episodes: int = 1000
+    target_update_period: int = 50
+    replay_capacity: int = 5000
+    replay_batch: int = 1
+    delta_q_threshold: float = 0.02
+    delta_q_window: int = 100
+
+    def __post_init__(self) -> None:
+        _positive(self, "learning_rate", "delta_q_threshold", prefix="agent.")
+        _fraction(self, "momentum", "gamma", "epsilon_start", "epsilon_end", prefix="agent.")
+        for name in ("random_episodes", "replay_batch"):
+            if getattr(self, name) < 0:
+                raise ConfigError(f"agent.{name}", "must be >= 0")
+        for name in ("target_update_period", "replay_capacity", "delta_q_window"):
+            if getattr(self, name) < 1:
+                raise ConfigError(f"agent.{name}", "must be >= 1")
+
+
+@dataclass(frozen=True)
+class RewardConfig:
+    """Rewards (paper eq. 5).
+
+    Attributes:
+        grasp: r_G for a successful grasp.
+        assembly: r_AM when the assembly is faster than the threshold (VGS mode only).
+        threshold_s: Assembly-time threshold [s]; ``None`` derives it from the assembly times
+            of the random-exploration phase.
+        threshold_percentile: Percentile of the exploration-phase times used when
+            ``threshold_s`` is ``None``.
+    """
+
+    grasp: float = 0.3
+    assembly: float = 0.7
+    threshold_s: float | None = None
+    threshold_percentile: float = 50.0
+
+    def __post_init__(self) -> None:
+        _non_negative(self, "grasp", "assembly", prefix="reward.")
+        if self.threshold_s is not None and not self.threshold_s > 0:
+            raise ConfigError("reward.threshold_s", "must be > 0 when given")
+        if not 0.0 < self.threshold_percentile < 100.0:
+            raise ConfigError("reward.threshold_percentile", "must lie in (0, 100)")
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """Training run.
+
+    Attributes:
+        episodes: Grasp-and-assemble episodes in all (paper: 5000).
+        checkpoint_every: Episodes between checkpoints (a multiple of ``parallel_episodes``).
+        device: ``cpu``, ``cuda`` or ``auto``.
+        parallel_episodes: K; 1 (default, as in the paper) runs grasp, assembly and update one
+            episode after the other. K > 1 chooses the grasps of K consecutive episodes with the
+            same network, runs their physics in K worker processes and then updates in episode
+            order: for machines with many cores, the network's information is up to K - 1
+            episodes older when it decides.
+    """
+
+    episodes: int = 5000
+    checkpoint_every: int = 50
+    device: str = "auto"
+    parallel_episodes: int = 1
+
+    def __post_init__(self) -> None:
+        if self.episodes < 1:
+            raise ConfigError("train.episodes", "must be >= 1")
+        if self.checkpoint_every < 1:
+            raise ConfigError("train.checkpoint_every", "must be >= 1")
+        if self.device not in ("cpu", "cuda", "auto"):
+            raise ConfigError("train.device", f"must be cpu, cuda or auto, got {self.device!r}")
+        if self.parallel_episodes < 1:
+            raise ConfigError("train.parallel_episodes", "must be >= 1")
+        if self.checkpoint_every % self.parallel_episodes:
+            raise ConfigError("train.checkpoint_every",
+                              f"must be a multiple of train.parallel_episodes "
+                              f"({self.parallel_episodes}), so that a resumed run starts a batch")

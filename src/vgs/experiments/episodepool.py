@@ -1,0 +1,238 @@
+"""The episode pool: runs planned test episodes (:class:`EpisodeTask`) in this process, in
+spawned worker processes or in Ray actors, and yields one table row per episode.
+
+A worker (:class:`EpisodeWorker`, one per process or actor) keeps its cell and its policies; an
+exception in an episode becomes a failure row, and an episode whose worker process dies is
+tried again alone up to :data:`MAX_ATTEMPTS` times before it becomes a ``worker_lost`` row.
+:mod:`vgs.experiments.evaluate` plans the episodes and writes the rows.
+"""
+
+from __future__ import annotations
+
+import math
+import multiprocessing as mp
+import signal
+import sys
+import time
+from collections.abc import Generator, Iterator
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from vgs.assembly.episode import EpisodeRunner
+from vgs.assembly.record import EpisodeRecord
+from vgs.config import ExperimentConfig, PegConfig
+from vgs.errors import ConfigError, VGSError
+from vgs.experiments.policies import EvalPolicy, is_run_dir, load_policy
+from vgs.runfolder import host
+
+MAX_ATTEMPTS = 3
+
+
+@dataclass(frozen=True)
+class EpisodeTask:
+    """One planned test episode: which policy, which scene (seed) and which peg.
+
+    ``job`` tells :func:`evaluate_many` which evaluation the row belongs to.
+    """
+
+    index: int
+    seed: int
+    peg: PegConfig
+    policy: str
+    job: int = 0
+
+
+class EpisodeWorker:
+    """Runs test episodes; one per worker process (or Ray actor). Policies are loaded on first
+    use and kept.
+
+    Args:
+        cfg: Experiment configuration.
+    """
+
+    def __init__(self, cfg: ExperimentConfig) -> None:
+        self.cfg = cfg
+        self.runner = EpisodeRunner(cfg)
+        self.policies: dict[str, EvalPolicy] = {}
+
+    def policy(self, spec: str) -> EvalPolicy:
+        """The policy of ``spec``; networks go to the GPU when ``train.device`` allows one.
+
+        Torch is imported only for a policy that needs it (a training run, or a user policy that
+        imports it), so workers of the heuristic policies start in about a second; where it is
+        loaded it runs on one thread.
+        """
+        if spec not in self.policies:
+            device = "cpu"
+            if is_run_dir(spec):
+                import torch
+
+                if self.cfg.train.device != "cpu" and torch.cuda.is_available():
+                    device = "cuda"
+            self.policies[spec] = load_policy(spec, self.cfg, device)
+            torch_module = sys.modules.get("torch")  # loaded by the policy, if it needs it
+            if torch_module is not None:
+                torch_module.set_num_threads(1)
+        return self.policies[spec]
+
+    def run(self, task: EpisodeTask) -> dict[str, Any]:
+        """One episode as a table row; an exception becomes a failure row."""
+        t0 = time.perf_counter()
+        decision: dict[str, Any] = {}
+        rng = np.random.default_rng([task.seed, 2])
+        try:
+            chooser = self.policy(task.policy)
+
+            def policy(hm: Any) -> Any:
+                d = chooser(hm, rng)
+                decision.update(rotation=d.rotation, row=d.row, col=d.col, q_value=d.q_value)
+                return d.command
+
+            record, _, _ = self.runner.run(task.seed, policy, peg=task.peg)
+            if record.success and not math.isfinite(record.assembly_time):
+                record.success, record.failure_reason = False, "unstable"
+        except Exception as exc:  # noqa: BLE001 - any failure of one episode is a result row
+            record = EpisodeRecord(seed=task.seed, peg_mass=task.peg.mass,
+                                   peg_length=task.peg.length)
+            message = " ".join(str(exc).split())[:200]
+            record.failure_reason = f"error:{type(exc).__name__}: {message}"
+        return task_row(task, record, decision, round(time.perf_counter() - t0, 3))
+
+
+_WORKER: EpisodeWorker | None = None
+
+
+def _init_process(cfg: ExperimentConfig) -> None:
+    global _WORKER
+    # Ctrl-C reaches the whole process group: the parent handles it (and stops the pool).
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _WORKER = EpisodeWorker(cfg)
+
+
+def _run_in_process(task: EpisodeTask) -> dict[str, Any]:
+    if _WORKER is None:
+        raise VGSError("evaluation worker used before its initialisation")
+    return _WORKER.run(task)
+
+
+def task_row(task: EpisodeTask, record: EpisodeRecord, decision: dict[str, Any],
+         wall: float) -> dict[str, Any]:
+    """One table row (column vocabulary of :mod:`vgs.columns`): the task's place, the record,
+    the policy's decision, the wall time, the host."""
+    return {"job": task.job, "index": task.index, **record.to_row(),
+            "rotation": decision.get("rotation", -1), "row": decision.get("row", -1),
+            "col": decision.get("col", -1), "q_value": decision.get("q_value", math.nan),
+            "wall_s": wall, **host()}
+
+
+def _lost_row(task: EpisodeTask) -> dict[str, Any]:
+    record = EpisodeRecord(seed=task.seed, peg_mass=task.peg.mass, peg_length=task.peg.length)
+    record.failure_reason = "worker_lost"
+    return task_row(task, record, {}, math.nan)
+
+
+def _pool_round(cfg: ExperimentConfig, queue: list[EpisodeTask], workers: int
+                ) -> Generator[dict[str, Any], None, tuple[list[EpisodeTask], list[EpisodeTask]]]:
+    """Run ``queue`` on a fresh pool, yielding rows as they finish, until done or broken.
+
+    Returns (as the generator's value):
+        The episodes in flight when a worker died (suspects) and those not yet started.
+    """
+    ctx = mp.get_context("spawn")
+    queue = list(queue)
+    futures: dict[Future[dict[str, Any]], EpisodeTask] = {}
+    with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init_process,
+                             initargs=(cfg,)) as pool:
+        while queue or futures:
+            while queue and len(futures) < workers:
+                task = queue.pop(0)
+                futures[pool.submit(_run_in_process, task)] = task
+            done, _ = wait(futures, return_when=FIRST_COMPLETED)
+            for fut in done:
+                try:
+                    row = fut.result()
+                except BrokenProcessPool:
+                    return list(futures.values()), queue
+                futures.pop(fut)
+                yield row
+    return [], []
+
+
+def run_local(cfg: ExperimentConfig, tasks: list[EpisodeTask],
+              workers: int) -> Iterator[dict[str, Any]]:
+    """Rows of ``tasks`` (in completion order) from ``workers`` spawned processes.
+
+    ``workers == 1`` runs in this process. When a worker process dies, the pool is rebuilt for
+    the episodes not yet started, and each episode that was in flight is tried again alone in a
+    one-process pool (so a crash is pinned on the episode that caused it), at most
+    :data:`MAX_ATTEMPTS` times in all; then it becomes a ``worker_lost`` row.
+    """
+    if workers == 1:
+        worker = EpisodeWorker(cfg)
+        yield from map(worker.run, tasks)
+        return
+    queue = list(tasks)
+    while queue:
+        suspects, queue = yield from _pool_round(cfg, queue, workers)
+        for task in suspects:
+            for _ in range(MAX_ATTEMPTS - 1):
+                lost, _ = yield from _pool_round(cfg, [task], 1)
+                if not lost:
+                    break
+            else:
+                yield _lost_row(task)
+
+
+def run_ray(cfg: ExperimentConfig, tasks: list[EpisodeTask], workers: int,
+            address: str | None = None) -> Iterator[dict[str, Any]]:
+    """Rows of ``tasks`` from ``workers`` Ray actors (a local Ray instance when no address).
+
+    Actors are restarted when their process dies and the call is retried (Ray's
+    ``max_restarts``/``max_task_retries``); an episode whose actor is lost for good becomes a
+    ``worker_lost`` row.
+
+    Raises:
+        ConfigError: ``backend`` if Ray is not installed.
+    """
+    try:
+        import ray
+    except ImportError as exc:
+        raise ConfigError("backend", "ray is not installed; pip install 'vgs[ray]'") from exc
+    import logging
+
+    started = False
+    if not ray.is_initialized():
+        kwargs: dict[str, Any] = {"include_dashboard": False, "log_to_driver": False,
+                                  "logging_level": logging.ERROR}
+        if address is None:
+            kwargs["num_cpus"] = workers
+        ray.init(address=address, **kwargs)
+        started = True
+    try:
+        actor_cls = ray.remote(num_cpus=1, max_restarts=MAX_ATTEMPTS - 1,
+                               max_task_retries=MAX_ATTEMPTS - 1)(EpisodeWorker)
+        actors = [actor_cls.remote(cfg) for _ in range(min(workers, len(tasks)))]
+        queue = list(tasks)
+        running: dict[Any, tuple[Any, EpisodeTask]] = {}
+        idle = list(actors)
+        while queue or running:
+            while queue and idle:
+                actor, task = idle.pop(), queue.pop(0)
+                running[actor.run.remote(task)] = (actor, task)
+            done, _ = ray.wait(list(running), num_returns=1)
+            actor, task = running.pop(done[0])
+            try:
+                yield ray.get(done[0])
+                idle.append(actor)
+            except ray.exceptions.RayActorError:
+                yield _lost_row(task)
+                idle.append(actor_cls.remote(cfg))
+        for actor in actors:
+            ray.kill(actor)
+    finally:
+        if started:
+            ray.shutdown()

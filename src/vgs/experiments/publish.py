@@ -1,0 +1,71 @@
+"""Publishing a reproduction: the small result files and the final networks of its training runs
+copied into a folder that can be committed (``vgs report DIR --publish DEST``)."""
+
+from __future__ import annotations
+
+import shutil
+import warnings
+from pathlib import Path
+
+from vgs.errors import ConfigError
+from vgs.experiments.layout import train_folders
+from vgs.runfolder import read_json
+
+PUBLISH_POLICY_LIMIT = 10_000_000  # bytes: final networks a published run commits (light backbone)
+
+
+PUBLISHED = ("reproduce.json", "report.md", "report.html", "results.csv", "figures/*.png",
+             "eval/*/*/episodes.parquet", "eval/*/*/episodes.csv", "eval/*/*/summary.json",
+             "train/*/episodes.csv", "train/*/run.json", "train/*/threshold.json",
+             "train/*/convergence.json", "sweep/*")
+
+
+def publish(out: Path, dest: Path) -> list[Path]:
+    """Copy the small result files of a reproduction (no checkpoints, no TensorBoard logs, no
+    journals) from ``out`` to ``dest`` (e.g. ``docs/results/quick``), keeping the layout, and
+    the final networks of each finished training run as a policy folder ``dest/<mode>/``
+    (``dest/<run>/`` when a mode has several runs): ``policy.pt``, ``policy.json`` and
+    ``run.json``, which ``vgs evaluate --policy dest/<mode>`` loads on a fresh clone
+    (:func:`vgs.experiments.export_policy.export_policy`). Networks over
+    ``PUBLISH_POLICY_LIMIT`` (a DenseNet-121 policy) are not published, with a warning.
+
+    Returns:
+        The copied files.
+
+    Raises:
+        ConfigError: If ``out`` holds no report, or a policy folder in ``dest`` holds another
+            run.
+    """
+    if not (out / "report.md").exists():
+        raise ConfigError("report", f"{out} holds no report.md; run vgs report first")
+    copied = []
+    for pattern in PUBLISHED:
+        for src in sorted(out.glob(pattern)):
+            if src.is_file():
+                target = dest / src.relative_to(out)
+                target.parent.mkdir(parents=True, exist_ok=True)
+                shutil.copy2(src, target)
+                copied.append(target)
+    finished = [run for run in train_folders(out)
+                if (run / "checkpoint.pt").exists() and (run / "convergence.json").exists()]
+    if finished:
+        from vgs.experiments.export_policy import export_policy
+
+        modes = [str(read_json(run / "run.json").get("mode")) for run in finished]
+        for run, mode in zip(finished, modes, strict=True):
+            folder = dest / (mode if modes.count(mode) == 1 else run.name)
+            written = export_policy(run, folder)
+            files = [written.weights, written.description, folder / "run.json"]
+            size = written.weights.stat().st_size
+            if size > PUBLISH_POLICY_LIMIT:
+                # A DenseNet-121 policy (about 57 MB) is too large to commit: users train it.
+                for f in files:
+                    f.unlink(missing_ok=True)
+                if folder.exists() and not any(folder.iterdir()):
+                    folder.rmdir()
+                warnings.warn(f"{run.name}: its final networks take {size / 1e6:.0f} MB, over "
+                              f"the {PUBLISH_POLICY_LIMIT / 1e6:.0f} MB a published run commits; "
+                              "not published", stacklevel=2)
+                continue
+            copied += files
+    return copied
