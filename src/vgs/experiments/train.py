@@ -45,12 +45,10 @@ their meaning and the extra ones act at the final epsilon. The folder is locked
 from __future__ import annotations
 
 import math
-import multiprocessing as mp
 import os
 import subprocess
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -59,15 +57,14 @@ import torch
 from tqdm import tqdm
 
 from vgs.assembly.episode import EpisodeRunner, GraspCommand
-from vgs.assembly.record import EpisodeRecord
 from vgs.config import ExperimentConfig, to_dict
 from vgs.errors import (
     CheckpointError,
     ConfigError,
     CorruptFileError,
     RunMismatchError,
-    VGSError,
 )
+from vgs.experiments.episodepool import BACKENDS, GraspTask, TrainingPool
 from vgs.experiments.policies import pixel_command
 from vgs.experiments.trainfolder import (
     RECORD_COLUMNS,
@@ -132,32 +129,6 @@ def git_revision() -> str:
 
 
 
-_COLLECTOR_RUNNER: EpisodeRunner | None = None
-
-
-def _init_collector(cfg: ExperimentConfig) -> None:
-    global _COLLECTOR_RUNNER
-    import signal
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
-    torch.set_num_threads(1)
-    _COLLECTOR_RUNNER = EpisodeRunner(cfg)
-
-
-def _run_command(seed: int, command: GraspCommand) -> EpisodeRecord:
-    """One training episode's physics in a collector process, the grasp already chosen."""
-    if _COLLECTOR_RUNNER is None:
-        raise VGSError("training collector used before its initialisation")
-    record, _, _ = _COLLECTOR_RUNNER.run(seed, lambda hm: command)
-    return record
-
-
-
-
-
-
-
-
 def _check_start(cfg: ExperimentConfig, mode: str, out: Path
                  ) -> tuple[int, dict[str, Any] | None]:
     """Check the request against ``run.json`` without writing anything.
@@ -195,7 +166,8 @@ def _check_start(cfg: ExperimentConfig, mode: str, out: Path
 
 
 def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
-          threads: int | None = None, position: int = 0) -> Path:
+          threads: int | None = None, position: int = 0, backend: str = "local",
+          ray_address: str | None = None) -> Path:
     """Train (or resume) one policy; return the run directory.
 
     Args:
@@ -206,6 +178,10 @@ def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
         progress: Show a progress bar.
         threads: Torch CPU threads (default: up to 4, at most the number of cores).
         position: Line of the progress bar (several runs side by side).
+        backend: Where the physics of parallel episodes (``train.parallel_episodes`` > 1)
+            runs: ``local`` (spawned processes) or ``ray`` (Ray actors,
+            :class:`vgs.experiments.episodepool.TrainingPool`); the table is the same.
+        ray_address: Address of a running Ray cluster (``ray``; default: start a local one).
 
     Raises:
         ConfigError: On an unknown mode or a bad configuration (checked before anything is
@@ -217,16 +193,19 @@ def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
     """
     if mode not in MODES:
         raise ConfigError("mode", f"must be one of {MODES}, got {mode!r}")
+    if backend not in BACKENDS:
+        raise ConfigError("backend", f"must be one of {BACKENDS}, got {backend!r}")
     cfg = check_config(cfg)  # before anything is written
     device = resolve_device(cfg.train.device)
     if out.exists() and not out.is_dir():
         raise ConfigError("out", f"{out} is a file, not a folder")
     with locked(out):
-        return _train(cfg, mode, out, device, progress, threads, position)
+        return _train(cfg, mode, out, device, progress, threads, position, backend,
+                      ray_address)
 
 
 def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: bool,
-           threads: int | None, position: int) -> Path:
+           threads: int | None, position: int, backend: str, ray_address: str | None) -> Path:
     # Everything is checked before anything is written: the networks can be built, the request
     # matches run.json, the checkpoint and the table fit.
     total = cfg.train.episodes
@@ -265,11 +244,10 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
     recent: list[tuple[bool, float]] = []
     recent_walls: list[float] = []
     # Parallel episodes (train.parallel_episodes = K > 1): the grasps of K consecutive episodes
-    # are chosen with the same network, their physics runs in K worker processes, and the
-    # updates follow in episode order.
+    # are chosen with the same network, their physics runs on K workers of the episode pool
+    # (local processes or Ray actors), and the updates follow in episode order.
     k_parallel = cfg.train.parallel_episodes
-    collector = (ProcessPoolExecutor(k_parallel, mp_context=mp.get_context("spawn"),
-                                     initializer=_init_collector, initargs=(cfg,))
+    collector = (TrainingPool(cfg, k_parallel, backend, ray_address)
                  if k_parallel > 1 else None)
     pending: dict[int, tuple[Any, int, float, GraspAction, Heightmap]] = {}
     try:
@@ -298,11 +276,10 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
                         hm_e = runner.observe(seed_e)
                         act_e = agent.act(hm_e.color, hm_e.depth, eps_e, peg_mask(hm_e.depth),
                                           rng, skip_q_if_exploring=True)
-                        pending[e] = (collector.submit(_run_command, seed_e,
-                                                       action_to_command(act_e, hm_e)),
-                                      seed_e, eps_e, act_e, hm_e)
-                future, seed, epsilon, action, hm = pending.pop(episode)
-                record = future.result()
+                        pending[e] = (collector.submit(GraspTask(seed_e, action_to_command(
+                            act_e, hm_e))), seed_e, eps_e, act_e, hm_e)
+                handle, seed, epsilon, action, hm = pending.pop(episode)
+                record = collector.result(handle)
 
             # Reward (eq. 5). The threshold is the running percentile while exploring.
             exploring = episode < cfg.agent.random_episodes
@@ -380,7 +357,7 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
         csv_file.close()
         writer.close()
         if collector is not None:
-            collector.shutdown(cancel_futures=True)
+            collector.close()
     if cfg.reward.threshold_s is None and state.episode >= cfg.agent.random_episodes:
         # (the same content as written when the threshold froze: restores a damaged copy)
         write_json(out / "threshold.json",
