@@ -34,3 +34,23 @@ def test_unknown_backend_is_refused_before_anything_is_written(tmp_path: Path) -
         train_mod.train(two_parallel(), "vgs", tmp_path / "run", progress=False,
                         backend="dask")
     assert not (tmp_path / "run").exists()
+
+
+def test_vgs_train_passes_the_backend_flags(tmp_path: Path,
+                                            monkeypatch: pytest.MonkeyPatch) -> None:
+    """``vgs train --backend ray --ray-address ADDR`` as ``vgs evaluate`` takes them."""
+    from vgs.cli import main
+
+    seen: dict[str, object] = {}
+
+    def fake_train(cfg, mode, out, **kwargs):
+        seen.update(kwargs, mode=mode)
+        return out
+
+    monkeypatch.setattr(train_mod, "train", fake_train)
+    args = ["train", "--mode", "vgs", "--profile", "smoke", "--out", str(tmp_path / "run"),
+            "--no-progress"]
+    assert main([*args, "--backend", "ray", "--ray-address", "auto"]) == 0
+    assert (seen["backend"], seen["ray_address"], seen["mode"]) == ("ray", "auto", "vgs")
+    assert main(args) == 0
+    assert (seen["backend"], seen["ray_address"]) == ("local", None)
