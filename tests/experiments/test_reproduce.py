@@ -36,3 +36,21 @@ def test_evaluate_stage_refuses_unfinished_training(tmp_path: Path) -> None:
     rep = Reproduction(profile("smoke"), tmp_path, workers=1, progress=False)
     with pytest.raises(ConfigError, match="training has not finished"):
         rep.evaluate()
+
+
+def test_train_stage_passes_the_backend_to_training(tmp_path: Path,
+                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    """``vgs reproduce --backend ray`` runs the training runs' parallel episodes on Ray too."""
+    from vgs.experiments import reproduce
+
+    calls: list[tuple[str, str, str | None]] = []
+
+    def fake_train(cfg, mode, out, **kwargs):
+        calls.append((mode, kwargs["backend"], kwargs["ray_address"]))
+        return out
+
+    monkeypatch.setattr(reproduce, "train", fake_train)
+    Reproduction(profile("smoke"), tmp_path, workers=1, backend="ray", ray_address="auto",
+                 progress=False).train()
+    assert calls and all(c[1:] == ("ray", "auto") for c in calls)
+    assert {c[0] for c in calls} == {"vgs", "baseline"}

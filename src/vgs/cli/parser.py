@@ -153,6 +153,8 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--backbone", help="densenet121 or light (default: the profile's)")
     train.add_argument("--seed", type=seed_arg, help="root seed (default: the profile's)")
     train.add_argument("--device", help="cpu, cuda or auto (default: the profile's)")
+    _backend_flags(train, "where the physics of parallel episodes (train.parallel_episodes > 1) "
+                          "runs: ")
     train.add_argument("--no-progress", action="store_true", help="no progress bar")
     train.set_defaults(func=cmd_train)
 
@@ -234,11 +236,16 @@ def build_parser() -> argparse.ArgumentParser:
 def _parallel_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument("--workers", type=int,
                    help="parallel worker processes (default: the number of CPU cores)")
+    _backend_flags(p)
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+
+
+def _backend_flags(p: argparse.ArgumentParser, what: str = "") -> None:
     p.add_argument("--backend", default="local", choices=("local", "ray"),
-                   help="local processes or Ray (pip install 'vgs[ray]') (default: local)")
+                   help=what + "local processes or Ray (pip install 'vgs[ray]') "
+                               "(default: local)")
     p.add_argument("--ray-address", help="address of a running Ray cluster (default: start a "
                                          "local one)")
-    p.add_argument("--no-progress", action="store_true", help="no progress bars")
 
 
 def main(argv: Sequence[str] | None = None) -> int:

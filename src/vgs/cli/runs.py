@@ -131,7 +131,8 @@ def cmd_train(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     cfg = flag_overrides(cfg, args, {"episodes": "train.episodes",
                                      "backbone": "network.backbone", "seed": "seed",
                                      "device": "train.device"})
-    out = train(cfg, args.mode, Path(args.out), progress=not args.no_progress)
+    out = train(cfg, args.mode, Path(args.out), progress=not args.no_progress,
+                backend=args.backend, ray_address=args.ray_address)
     print(f"run in {out}: episodes.csv, tensorboard/, checkpoint.pt")
     return 0
 

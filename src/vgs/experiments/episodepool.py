@@ -1,5 +1,7 @@
 """The episode pool: runs planned test episodes (:class:`EpisodeTask`) in this process, in
-spawned worker processes or in Ray actors, and yields one table row per episode.
+spawned worker processes or in Ray actors, and yields one table row per episode; and training's
+parallel episodes (:class:`GraspTask`, the grasp already chosen) on the same workers
+(:class:`TrainingPool`), local processes or Ray actors.
 
 A worker (:class:`EpisodeWorker`, one per process or actor) keeps its cell and its policies; an
 exception in an episode becomes a failure row, and an episode whose worker process dies is
@@ -22,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from vgs.assembly.episode import EpisodeRunner
+from vgs.assembly.episode import EpisodeRunner, GraspCommand
 from vgs.assembly.record import EpisodeRecord
 from vgs.config import ExperimentConfig, PegConfig
 from vgs.errors import ConfigError, VGSError
@@ -30,6 +32,7 @@ from vgs.experiments.policies import EvalPolicy, is_run_dir, load_policy
 from vgs.runfolder import host
 
 MAX_ATTEMPTS = 3
+BACKENDS = ("local", "ray")
 
 
 @dataclass(frozen=True)
@@ -44,6 +47,14 @@ class EpisodeTask:
     peg: PegConfig
     policy: str
     job: int = 0
+
+
+@dataclass(frozen=True)
+class GraspTask:
+    """One training episode's physics: the scene (seed) and the grasp the learner chose."""
+
+    seed: int
+    command: GraspCommand
 
 
 class EpisodeWorker:
@@ -102,6 +113,12 @@ class EpisodeWorker:
             record.failure_reason = f"error:{type(exc).__name__}: {message}"
         return task_row(task, record, decision, round(time.perf_counter() - t0, 3))
 
+    def grasp(self, task: GraspTask) -> EpisodeRecord:
+        """One training episode with its grasp already chosen (an exception propagates: the
+        training run stops and resumes from its checkpoint)."""
+        record, _, _ = self.runner.run(task.seed, lambda hm: task.command)
+        return record
+
 
 _WORKER: EpisodeWorker | None = None
 
@@ -117,6 +134,12 @@ def _run_in_process(task: EpisodeTask) -> dict[str, Any]:
     if _WORKER is None:
         raise VGSError("evaluation worker used before its initialisation")
     return _WORKER.run(task)
+
+
+def _grasp_in_process(task: GraspTask) -> EpisodeRecord:
+    if _WORKER is None:
+        raise VGSError("episode worker used before its initialisation")
+    return _WORKER.grasp(task)
 
 
 def task_row(task: EpisodeTask, record: EpisodeRecord, decision: dict[str, Any],
@@ -187,6 +210,36 @@ def run_local(cfg: ExperimentConfig, tasks: list[EpisodeTask],
                 yield _lost_row(task)
 
 
+def _start_ray(workers: int, address: str | None) -> tuple[Any, bool]:
+    """Ray, initialised (a local instance of ``workers`` CPUs when no address and none is
+    running), and whether this call started it.
+
+    Raises:
+        ConfigError: ``backend`` if Ray is not installed.
+    """
+    try:
+        import ray
+    except ImportError as exc:
+        raise ConfigError("backend", "ray is not installed; pip install 'vgs[ray]'") from exc
+    import logging
+
+    if ray.is_initialized():
+        return ray, False
+    kwargs: dict[str, Any] = {"include_dashboard": False, "log_to_driver": False,
+                              "logging_level": logging.ERROR}
+    if address is None:
+        kwargs["num_cpus"] = workers
+    ray.init(address=address, **kwargs)
+    return ray, True
+
+
+def _ray_actor_class(ray: Any) -> Any:
+    """:class:`EpisodeWorker` as a Ray actor of one CPU, restarted and its call retried when
+    its process dies."""
+    return ray.remote(num_cpus=1, max_restarts=MAX_ATTEMPTS - 1,
+                      max_task_retries=MAX_ATTEMPTS - 1)(EpisodeWorker)
+
+
 def run_ray(cfg: ExperimentConfig, tasks: list[EpisodeTask], workers: int,
             address: str | None = None) -> Iterator[dict[str, Any]]:
     """Rows of ``tasks`` from ``workers`` Ray actors (a local Ray instance when no address).
@@ -198,23 +251,9 @@ def run_ray(cfg: ExperimentConfig, tasks: list[EpisodeTask], workers: int,
     Raises:
         ConfigError: ``backend`` if Ray is not installed.
     """
+    ray, started = _start_ray(workers, address)
     try:
-        import ray
-    except ImportError as exc:
-        raise ConfigError("backend", "ray is not installed; pip install 'vgs[ray]'") from exc
-    import logging
-
-    started = False
-    if not ray.is_initialized():
-        kwargs: dict[str, Any] = {"include_dashboard": False, "log_to_driver": False,
-                                  "logging_level": logging.ERROR}
-        if address is None:
-            kwargs["num_cpus"] = workers
-        ray.init(address=address, **kwargs)
-        started = True
-    try:
-        actor_cls = ray.remote(num_cpus=1, max_restarts=MAX_ATTEMPTS - 1,
-                               max_task_retries=MAX_ATTEMPTS - 1)(EpisodeWorker)
+        actor_cls = _ray_actor_class(ray)
         actors = [actor_cls.remote(cfg) for _ in range(min(workers, len(tasks)))]
         queue = list(tasks)
         running: dict[Any, tuple[Any, EpisodeTask]] = {}
@@ -236,3 +275,93 @@ def run_ray(cfg: ExperimentConfig, tasks: list[EpisodeTask], workers: int,
     finally:
         if started:
             ray.shutdown()
+
+
+class TrainingPool:
+    """Training's parallel episodes: ``workers`` :class:`EpisodeWorker` processes (``local``,
+    spawned) or Ray actors (``ray``; a local Ray instance when no address), kept for the whole
+    run.
+
+    :meth:`submit` starts an episode, :meth:`result` waits for its record; training consumes
+    the records in episode order, whatever the backend and whichever worker finishes first, so
+    local and Ray training give the same table. A
+    worker that dies stops the run (a local pool) or is restarted by Ray and its episode
+    run again; what is lost for good raises :class:`vgs.errors.VGSError`, and the run resumes
+    from its last checkpoint.
+
+    Args:
+        cfg: Experiment configuration.
+        workers: Worker processes or actors (``train.parallel_episodes``).
+        backend: ``local`` or ``ray``.
+        address: Address of a running Ray cluster (``ray``; default: start a local one).
+
+    Raises:
+        ConfigError: On an unknown backend, or ``ray`` without Ray installed.
+    """
+
+    def __init__(self, cfg: ExperimentConfig, workers: int, backend: str = "local",
+                 address: str | None = None) -> None:
+        if backend not in BACKENDS:
+            raise ConfigError("backend", f"must be one of {BACKENDS}, got {backend!r}")
+        self.backend = backend
+        self._ray: Any = None
+        self._started = False
+        self._actors: list[Any] = []
+        self._next = 0
+        self._pool: ProcessPoolExecutor | None = None
+        if backend == "local":
+            self._pool = ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn"),
+                                             initializer=_init_process, initargs=(cfg,))
+        else:
+            self._ray, self._started = _start_ray(workers, address)
+            actor_cls = _ray_actor_class(self._ray)
+            self._actors = [actor_cls.remote(cfg) for _ in range(workers)]
+
+    def submit(self, task: GraspTask) -> Any:
+        """Start ``task`` on the next worker (round robin); its handle for :meth:`result`."""
+        if self._pool is not None:
+            return self._pool.submit(_grasp_in_process, task)
+        actor = self._actors[self._next % len(self._actors)]
+        self._next += 1
+        return actor.grasp.remote(task)
+
+    def result(self, handle: Any) -> EpisodeRecord:
+        """The record of a submitted task (waits for it).
+
+        Raises:
+            VGSError: If its worker was lost for good.
+        """
+        if self._pool is not None:
+            try:
+                return handle.result()
+            except BrokenProcessPool as exc:
+                raise VGSError(f"a training worker process died ({exc}); start the run "
+                               "again to resume from its checkpoint") from None
+        try:
+            return self._ray.get(handle)
+        except self._ray.exceptions.RayActorError as exc:
+            raise VGSError(f"a training worker was lost ({type(exc).__name__}); start the run "
+                           "again to resume from its checkpoint") from None
+
+    def run(self, tasks: list[GraspTask]) -> list[EpisodeRecord]:
+        """The records of ``tasks``, in their order."""
+        return [self.result(h) for h in [self.submit(task) for task in tasks]]
+
+    def close(self) -> None:
+        """Stop the workers (and the Ray instance this pool started)."""
+        if self._pool is not None:
+            self._pool.shutdown(cancel_futures=True)
+            self._pool = None
+        if self._ray is not None:
+            for actor in self._actors:
+                self._ray.kill(actor)
+            self._actors = []
+            if self._started:
+                self._ray.shutdown()
+            self._ray = None
+
+    def __enter__(self) -> TrainingPool:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

@@ -57,14 +57,13 @@ from vgs.assembly.record import EpisodeRecord
 from vgs.columns import write_parquet
 from vgs.config import CONDITIONS, ExperimentConfig, PegConfig, to_dict
 from vgs.errors import ConfigError, CorruptFileError, RunMismatchError
-from vgs.experiments.episodepool import EpisodeTask, run_local, run_ray, task_row
+from vgs.experiments.episodepool import BACKENDS, EpisodeTask, run_local, run_ray, task_row
 from vgs.experiments.journal import encode_row, read_journal
 from vgs.experiments.policies import EvalPolicy, load_policy, policy_label
 from vgs.experiments.stats import sample_std
 from vgs.runfolder import check_request, locked, read_json, write_json
 from vgs.validate import check_config, check_seed
 
-BACKENDS = ("local", "ray")
 EVAL_STREAM = 0xE7A1  # tags the seed sequences of test episodes
 
 

@@ -63,10 +63,11 @@ def _ignore_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
-def _train_job(args: tuple[ExperimentConfig, str, str, bool, int, int]) -> str:
-    cfg, mode, out, progress, threads, position = args
+def _train_job(args: tuple[ExperimentConfig, str, str, bool, int, int, str, str | None]
+               ) -> str:
+    cfg, mode, out, progress, threads, position, backend, ray_address = args
     return str(train(cfg, mode, Path(out), progress=progress, threads=threads,
-                     position=position))
+                     position=position, backend=backend, ray_address=ray_address))
 
 
 class Reproduction:
@@ -76,7 +77,9 @@ class Reproduction:
         cfg: Experiment configuration (a profile with overrides).
         out: Output folder.
         workers: Parallel processes (default: the number of CPU cores).
-        backend: ``local`` or ``ray`` for the evaluations.
+        backend: ``local`` or ``ray`` for the evaluations and the training runs' parallel
+            episodes (``train.parallel_episodes`` > 1; without ``ray_address`` each training
+            run starts its own local Ray instance).
         ray_address: Ray cluster address (default: a local one).
         progress: Show progress bars.
 
@@ -141,7 +144,7 @@ class Reproduction:
             if self._trained(folder):
                 continue
             jobs.append((replace(self.cfg, seed=seed), mode, str(folder), self.progress,
-                         threads, i % parallel))
+                         threads, i % parallel, self.backend, self.ray_address))
         if parallel == 1 or len(jobs) <= 1:
             for job in jobs:
                 _train_job(job)

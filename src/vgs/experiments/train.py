@@ -45,11 +45,9 @@ their meaning and the extra ones act at the final epsilon. The folder is locked
 from __future__ import annotations
 
 import math
-import multiprocessing as mp
 import os
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -64,8 +62,8 @@ from vgs.errors import (
     CheckpointError,
     ConfigError,
     CorruptFileError,
-    VGSError,
 )
+from vgs.experiments.episodepool import BACKENDS, GraspTask, TrainingPool
 from vgs.experiments.policies import pixel_command
 from vgs.experiments.trainfolder import (
     RECORD_COLUMNS,
@@ -112,28 +110,11 @@ def resolve_device(name: str) -> str:
     return name
 
 
-_COLLECTOR_RUNNER: EpisodeRunner | None = None
-
-
-def _init_collector(cfg: ExperimentConfig) -> None:
-    global _COLLECTOR_RUNNER
-    import signal
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
-    torch.set_num_threads(1)
-    _COLLECTOR_RUNNER = EpisodeRunner(cfg)
-
-
-def _run_command(seed: int, command: GraspCommand) -> EpisodeRecord:
-    """One training episode's physics in a collector process, the grasp already chosen."""
-    if _COLLECTOR_RUNNER is None:
-        raise VGSError("training collector used before its initialisation")
-    record, _, _ = _COLLECTOR_RUNNER.run(seed, lambda hm: command)
-    return record
 
 
 def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
-          threads: int | None = None, position: int = 0) -> Path:
+          threads: int | None = None, position: int = 0, backend: str = "local",
+          ray_address: str | None = None) -> Path:
     """Train (or resume) one policy; return the run directory.
 
     Args:
@@ -144,6 +125,10 @@ def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
         progress: Show a progress bar.
         threads: Torch CPU threads (default: up to 4, at most the number of cores).
         position: Line of the progress bar (several runs side by side).
+        backend: Where the physics of parallel episodes (``train.parallel_episodes`` > 1)
+            runs: ``local`` (spawned processes) or ``ray`` (Ray actors,
+            :class:`vgs.experiments.episodepool.TrainingPool`); the table is the same.
+        ray_address: Address of a running Ray cluster (``ray``; default: start a local one).
 
     Raises:
         ConfigError: On an unknown mode or a bad configuration (checked before anything is
@@ -155,16 +140,19 @@ def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
     """
     if mode not in MODES:
         raise ConfigError("mode", f"must be one of {MODES}, got {mode!r}")
+    if backend not in BACKENDS:
+        raise ConfigError("backend", f"must be one of {BACKENDS}, got {backend!r}")
     cfg = check_config(cfg)  # before anything is written
     device = resolve_device(cfg.train.device)
     if out.exists() and not out.is_dir():
         raise ConfigError("out", f"{out} is a file, not a folder")
     with locked(out):
-        return _train(cfg, mode, out, device, progress, threads, position)
+        return _train(cfg, mode, out, device, progress, threads, position, backend,
+                      ray_address)
 
 
 def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: bool,
-           threads: int | None, position: int) -> Path:
+           threads: int | None, position: int, backend: str, ray_address: str | None) -> Path:
     # Everything is checked before anything is written: the networks can be built, the request
     # matches run.json, the checkpoint and the table fit.
     total = cfg.train.episodes
@@ -194,7 +182,7 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
         write_json(out / "run.json", new_meta)
 
     log = _TrainLog(out, rows, mode, state.episode, total, progress, position)
-    source = _EpisodeSource(cfg, agent, runner, rng, schedule)
+    source = _EpisodeSource(cfg, agent, runner, rng, schedule, backend, ray_address)
     try:
         for episode in log.bar:
             t0 = time.perf_counter()
@@ -246,17 +234,18 @@ class _EpisodeSource:
     """The episodes' grasps and records, in episode order.
 
     One at a time in this process; or, with ``train.parallel_episodes = K > 1``, the grasps of
-    K consecutive episodes chosen with the same network and their physics run in K worker
-    processes (the updates still follow in episode order).
+    K consecutive episodes chosen with the same network and their physics run on K workers of
+    the episode pool (:class:`vgs.experiments.episodepool.TrainingPool`: local processes or Ray
+    actors); the updates still follow in episode order, so the table is the same.
     """
 
     def __init__(self, cfg: ExperimentConfig, agent: GraspAgent, runner: EpisodeRunner,
-                 rng: np.random.Generator, schedule: int) -> None:
+                 rng: np.random.Generator, schedule: int, backend: str = "local",
+                 ray_address: str | None = None) -> None:
         self.cfg, self.agent, self.runner, self.rng = cfg, agent, runner, rng
         self.schedule = schedule
         self.k = cfg.train.parallel_episodes
-        self.collector = (ProcessPoolExecutor(self.k, mp_context=mp.get_context("spawn"),
-                                              initializer=_init_collector, initargs=(cfg,))
+        self.collector = (TrainingPool(cfg, self.k, backend, ray_address)
                           if self.k > 1 else None)
         self.pending: dict[int, tuple[Any, int, float, GraspAction, Heightmap]] = {}
 
@@ -286,15 +275,14 @@ class _EpisodeSource:
                 hm_e = self.runner.observe(seed_e)
                 act_e = agent.act(hm_e.color, hm_e.depth, eps_e, peg_mask(hm_e.depth), rng,
                                   skip_q_if_exploring=True)
-                self.pending[e] = (self.collector.submit(_run_command, seed_e,
-                                                         action_to_command(act_e, hm_e)),
-                                   seed_e, eps_e, act_e, hm_e)
-        future, seed, epsilon, action, hm = self.pending.pop(episode)
-        return future.result(), seed, epsilon, action, hm
+                task = GraspTask(seed_e, action_to_command(act_e, hm_e))
+                self.pending[e] = (self.collector.submit(task), seed_e, eps_e, act_e, hm_e)
+        handle, seed, epsilon, action, hm = self.pending.pop(episode)
+        return self.collector.result(handle), seed, epsilon, action, hm
 
     def close(self) -> None:
         if self.collector is not None:
-            self.collector.shutdown(cancel_futures=True)
+            self.collector.close()
 
 
 def _threshold_doc(cfg: ExperimentConfig, state: TrainState) -> dict[str, Any]:
