@@ -89,3 +89,33 @@ def run_cli(argv: list[str], delay: float) -> None:
     from vgs.cli import main
 
     sys.exit(main(argv))
+
+
+def use_fake_physics(monkeypatch: Any) -> None:
+    """In this process: :class:`FakeRunner` for training and evaluation, one core (undone by
+    pytest's ``monkeypatch`` after the test)."""
+    from vgs.experiments import episodepool, train
+
+    monkeypatch.setattr(train, "EpisodeRunner", FakeRunner)
+    monkeypatch.setattr(episodepool, "EpisodeRunner", FakeRunner)
+    monkeypatch.setattr("os.cpu_count", lambda: 1)
+
+
+def vgs(capsys: Any, *argv: str) -> tuple[int, list[str]]:
+    """Exit code of ``vgs ARGV`` in this process and the stderr lines that are not progress
+    logs."""
+    from vgs.cli import main
+
+    capsys.readouterr()
+    rc = main(list(argv))
+    err = capsys.readouterr().err
+    return rc, [line for line in err.splitlines()
+                if not line.startswith(("train vgs", "train baseline", "eval "))]
+
+
+def one_line(rc: int, lines: list[str], *words: str) -> None:
+    """The command failed with exit code 2 and one ``vgs: error:`` line holding ``words``."""
+    assert rc == 2, lines
+    assert len(lines) == 1 and lines[0].startswith("vgs: error: "), lines
+    for word in words:
+        assert word in lines[0], lines

@@ -23,28 +23,10 @@ TRAIN = ["train", "--mode", "vgs", *fakes.CLI_FLAGS]
 
 @pytest.fixture(autouse=True)
 def fake_physics(monkeypatch: pytest.MonkeyPatch):
-    from vgs.experiments import episodepool
-    from vgs.experiments import train as train_mod
-
-    monkeypatch.setattr(train_mod, "EpisodeRunner", fakes.FakeRunner)
-    monkeypatch.setattr(episodepool, "EpisodeRunner", fakes.FakeRunner)
-    monkeypatch.setattr("os.cpu_count", lambda: 1)
+    fakes.use_fake_physics(monkeypatch)
 
 
-def vgs(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, list[str]]:
-    """Exit code and the stderr lines that are not progress logs."""
-    capsys.readouterr()
-    rc = main(list(argv))
-    err = capsys.readouterr().err
-    return rc, [line for line in err.splitlines()
-                if not line.startswith(("train vgs", "train baseline", "eval "))]
-
-
-def one_line(rc: int, lines: list[str], *words: str) -> None:
-    assert rc == 2, lines
-    assert len(lines) == 1 and lines[0].startswith("vgs: error: "), lines
-    for word in words:
-        assert word in lines[0], lines
+vgs, one_line = fakes.vgs, fakes.one_line
 
 
 def table(run: Path) -> pd.DataFrame:
