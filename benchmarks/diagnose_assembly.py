@@ -34,7 +34,9 @@ import collections
 import math
 import multiprocessing as mp
 import sys
+from collections.abc import Iterator
 from dataclasses import dataclass, field
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -77,25 +79,39 @@ def _init(sets: list[tuple[str, object]]) -> None:
     _RUNNER = EpisodeRunner(cfg)
 
 
-def _diagnose(job: tuple[float, int, int]) -> EpisodeDiagnosis:
+def _run_traced(offset_mm: float, scene: int, root: int) -> tuple[Any, Any]:
+    """``(record, robot)`` of scene ``scene`` (seeded as ``vgs sweep`` seeds its trials) with
+    the grasp ``offset_mm`` from the visible centre, per-tick states kept."""
     from vgs.assembly.episode import offset_policy
 
-    offset_mm, scene, root = job
     seed = int(np.random.SeedSequence([root, scene]).generate_state(1)[0])
     record, robot, _ = _RUNNER.run(seed, offset_policy(offset_mm / 1000.0), trace=True)
+    return record, robot
+
+
+def _replay(robot: Any) -> Iterator[tuple[float, str, np.ndarray, Any]]:
+    """``(time, phase, measured wrench, data)`` of each assembly tick, ``data`` holding the
+    recorded state with MuJoCo's kinematics applied (poses only)."""
     trace, cell = robot.trace, robot.cell
     data = mujoco.MjData(cell.model)
-    ids = cell.ids
-    phases: dict[str, PhaseStats] = {}
-    axis0 = None
-    visit_start = 0.0  # turn when the current visit of a phase began
-    prev_phase, prev_time, prev_turn = None, 0.0, 0.0
     for t, phase, wrench, qpos in zip(trace.time, trace.phase, trace.wrench, trace.qpos,
                                       strict=True):
         if phase not in PHASES:
             continue
         data.qpos[:] = qpos
         mujoco.mj_kinematics(cell.model, data)
+        yield t, phase, wrench, data
+
+
+def _diagnose(job: tuple[float, int, int]) -> EpisodeDiagnosis:
+    offset_mm, scene, root = job
+    record, robot = _run_traced(offset_mm, scene, root)
+    ids = robot.cell.ids
+    phases: dict[str, PhaseStats] = {}
+    axis0 = None
+    visit_start = 0.0  # turn when the current visit of a phase began
+    prev_phase, prev_time, prev_turn = None, 0.0, 0.0
+    for t, phase, wrench, data in _replay(robot):
         R_world_tcp = data.site_xmat[ids.tcp_site].reshape(3, 3)
         peg_axis = data.xmat[ids.peg_body].reshape(3, 3)[:, 2]
         axis_tcp = R_world_tcp.T @ peg_axis
@@ -121,28 +137,21 @@ def _diagnose(job: tuple[float, int, int]) -> EpisodeDiagnosis:
 def trace_episode(sets: list[tuple[str, object]], offset_mm: float, scene: int, root: int,
                   every: float) -> None:
     """Print the ground-truth timeline of one episode (see the module docstring)."""
-    from vgs.assembly.episode import offset_policy
-
     _init(sets)
-    seed = int(np.random.SeedSequence([root, scene]).generate_state(1)[0])
-    record, robot, _ = _RUNNER.run(seed, offset_policy(offset_mm / 1000.0), trace=True)
-    trace, cell = robot.trace, robot.cell
-    data = mujoco.MjData(cell.model)
+    record, robot = _run_traced(offset_mm, scene, root)
+    cell = robot.cell
     hole = cell.hole_position()
     half, radius = 0.5 * cell.cfg.peg.length, 0.5 * cell.cfg.peg.diameter
     print(f"hole {np.linalg.norm(cell.hole_xy - cell.cfg.hole.nominal_xy) * 1000:.1f} mm from "
           "nominal; columns: time [s], phase, lower face centre from the hole axis (x, y) [mm], "
           "lowest rim point below the hole's top face [mm], tilt [deg], measured force [N]")
     last_phase, last_t = None, -math.inf
-    for t, phase, wrench, qpos in zip(trace.time, trace.phase, trace.wrench, trace.qpos,
-                                      strict=True):
-        if phase not in PHASES or (phase == last_phase and t - last_t < every):
+    for t, phase, wrench, data in _replay(robot):
+        if phase == last_phase and t - last_t < every:
             continue
         if phase != last_phase:
             print(f"-- {phase}")
         last_phase, last_t = phase, t
-        data.qpos[:] = qpos
-        mujoco.mj_kinematics(cell.model, data)
         p = data.xpos[cell.ids.peg_body]
         axis = data.xmat[cell.ids.peg_body].reshape(3, 3)[:, 2]
         down = -axis if axis[2] > 0 else axis  # from the centre to the lower face

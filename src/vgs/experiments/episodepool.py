@@ -107,10 +107,8 @@ class EpisodeWorker:
             if record.success and not math.isfinite(record.assembly_time):
                 record.success, record.failure_reason = False, "unstable"
         except Exception as exc:  # noqa: BLE001 - any failure of one episode is a result row
-            record = EpisodeRecord(seed=task.seed, peg_mass=task.peg.mass,
-                                   peg_length=task.peg.length)
             message = " ".join(str(exc).split())[:200]
-            record.failure_reason = f"error:{type(exc).__name__}: {message}"
+            record = _failed_record(task, f"error:{type(exc).__name__}: {message}")
         return task_row(task, record, decision, round(time.perf_counter() - t0, 3))
 
     def grasp(self, task: GraspTask) -> EpisodeRecord:
@@ -130,16 +128,18 @@ def _init_process(cfg: ExperimentConfig) -> None:
     _WORKER = EpisodeWorker(cfg)
 
 
-def _run_in_process(task: EpisodeTask) -> dict[str, Any]:
+def _worker() -> EpisodeWorker:
     if _WORKER is None:
-        raise VGSError("evaluation worker used before its initialisation")
-    return _WORKER.run(task)
+        raise VGSError("episode worker used before its initialisation")
+    return _WORKER
+
+
+def _run_in_process(task: EpisodeTask) -> dict[str, Any]:
+    return _worker().run(task)
 
 
 def _grasp_in_process(task: GraspTask) -> EpisodeRecord:
-    if _WORKER is None:
-        raise VGSError("episode worker used before its initialisation")
-    return _WORKER.grasp(task)
+    return _worker().grasp(task)
 
 
 def task_row(task: EpisodeTask, record: EpisodeRecord, decision: dict[str, Any],
@@ -152,10 +152,14 @@ def task_row(task: EpisodeTask, record: EpisodeRecord, decision: dict[str, Any],
             "wall_s": wall, **host()}
 
 
+def _failed_record(task: EpisodeTask, reason: str) -> EpisodeRecord:
+    """The record of an episode that produced none (its worker raised or was lost)."""
+    return EpisodeRecord(seed=task.seed, peg_mass=task.peg.mass, peg_length=task.peg.length,
+                         failure_reason=reason)
+
+
 def _lost_row(task: EpisodeTask) -> dict[str, Any]:
-    record = EpisodeRecord(seed=task.seed, peg_mass=task.peg.mass, peg_length=task.peg.length)
-    record.failure_reason = "worker_lost"
-    return task_row(task, record, {}, math.nan)
+    return task_row(task, _failed_record(task, "worker_lost"), {}, math.nan)
 
 
 def _pool_round(cfg: ExperimentConfig, queue: list[EpisodeTask], workers: int
