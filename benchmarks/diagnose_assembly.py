@@ -191,6 +191,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     ap.add_argument("--trace", nargs=2, type=float, metavar=("OFFSET_MM", "SCENE"))
     ap.add_argument("--every", type=float, default=0.25, help="trace period [s]")
+    ap.add_argument("--episodes", action="store_true",
+                    help="also print one line per episode (outcome, retries, turn per phase)")
     args = ap.parse_args(argv)
     sets = _parse_set(args.set)
     if args.trace is not None:
@@ -201,6 +203,13 @@ def main(argv: list[str] | None = None) -> int:
     with mp.get_context("spawn").Pool(args.workers, initializer=_init, initargs=(sets,)) as pool:
         results = pool.map(_diagnose, jobs, chunksize=1)
     print("settings:", ", ".join(f"{k}={v}" for k, v in sets) or "defaults")
+    if args.episodes:
+        for r in results:
+            turns = " ".join(f"{ph}:{st.turn_deg:+.1f}" for ph, st in r.phases.items()
+                             if ph != "transport")
+            print(f"  {r.offset_mm:+6.1f} mm scene {r.scene:3d} "
+                  f"{'ok  ' if r.success else 'FAIL'} {r.failure:16s} retries {r.retries} "
+                  f"peak {r.peak_grasp_moment:.2f} N m  turn {turns}")
     for offset in offsets:
         rows = [r for r in results if r.offset_mm == offset]
         fails = collections.Counter(r.failure for r in rows if not r.success)

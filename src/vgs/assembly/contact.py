@@ -65,6 +65,30 @@ MAX_ALIGN_ADJUSTMENTS = 15  # adjustments in one alignment before it is judged l
 MAX_INSERT_STALLS = 4  # consecutive stalled wiggles before the insertion is judged lost
 
 
+HOP_REFERENCE_DISTANCE = 0.035  # plane contact this far from the nominal hole centre [m]
+
+
+HOP_HEIGHT = 0.001  # lift of the lowest rim point above the plane between two hops [m]
+
+
+HOP_PRESS_TIME = 0.15  # press at each hop before the height is read [s]
+
+
+HOP_SPEED = 0.01  # free-air speed between touch-downs [m/s]
+
+
+HOP_SETTLE = 0.1  # still time before each touch-down [s]
+
+
+HOP_DESCENT_SPEED = 0.003  # speed of each touch-down [m/s]
+
+
+HOP_LATERAL_STIFFNESS = 0.0  # lateral admittance stiffness of a touch-down [N/m]
+
+
+HOP_ROT_STIFFNESS = 100.0  # rotational admittance stiffness of a touch-down [N m/rad]; 0: default
+
+
 DROP_WINDOW = 3.0  # the drop is measured against the highest TCP height of this window [s]
 
 
@@ -162,6 +186,74 @@ class ContactPhases:
         self._check_grasp()
 
     def search(self) -> None:
+        if self.cfg.search_contact == "hop":
+            self._hop_search()
+        else:
+            self._rub_search()
+
+    def _hop_search(self) -> None:
+        """Archimedes spiral of touch-downs: the lowest rim point is lifted, carried in free
+        air to the next point of the spiral around the nominal hole and lowered until the
+        contact force reaches ``contact_force``; pressed with ``press_force``, the TCP height
+        below the plane contact's (the approach) is the rim point's depth. Deeper than
+        ``drop_threshold``: two-point contact (Figure 2b). Nothing rubs, so no friction turns
+        the peg in the pads."""
+        robot, cfg = self.robot, self.cfg
+        if self.retries == 0:
+            self.z_plane = robot.arm.tcp_height()
+            self.hop_index = 0
+        self.R_search = robot.arm.R_ref.copy()
+        b = cfg.spiral_pitch / (2 * math.pi)
+        low = self.low_rim_from_tcp[:2]
+        while True:
+            # Points spaced hop_step along the spiral r = b theta: d(theta) = step / |r'|.
+            k = self.hop_index
+            self.hop_index += 1
+            theta = self.hop_theta if k > 0 else 0.0
+            r = b * theta
+            if r > cfg.search_radius:
+                theta, r = 0.0, 0.0
+            self.hop_theta = theta + cfg.hop_step / math.hypot(r, b * 2)
+            target = self.hole_xy + r * np.array([math.cos(theta), math.sin(theta)])
+            z = self._touch_down(target - low)
+            if self.z_plane - z > cfg.drop_threshold:
+                self.z_search = self.z_plane
+                self.detected_by = "hop"
+                return
+            self._check_timeout("search")
+
+    def _touch_down(self, tcp_xy: np.ndarray) -> float:
+        """Lift, carry the TCP to ``tcp_xy`` in free air, lower it to contact, press; return
+        the TCP height [m] (the robot's own joint state)."""
+        robot, cfg = self.robot, self.cfg
+        adm = robot.arm.admittance
+        robot.arm.set_compliant(False)
+        p = robot.arm.p_ref.copy()
+        # Up from where the TCP is (never down into the surface), at least to the plane's.
+        p[2] = max(robot.arm.tcp_height(), p[2], self.z_plane) + HOP_HEIGHT
+        # Back to the search attitude: what the compliance gave way to at the last
+        # touch-down must not accumulate.
+        robot.move_to(p, self.R_search, speed=0.02, settle=0.0)
+        self._watch()
+        p[:2] = tcp_xy
+        robot.move_to(p, self.R_search, speed=HOP_SPEED, settle=HOP_SETTLE)
+        self._watch()
+        robot.arm.set_compliant(True)
+        self._comply(HOP_LATERAL_STIFFNESS, k_rot=HOP_ROT_STIFFNESS or None)
+        adm.wrench_des[:] = 0.0
+        adm.wrench_des[2] = -adm.damping[2] * HOP_DESCENT_SPEED
+        while robot.arm.wrench[2] < cfg.contact_force:
+            robot.tick()
+            self._watch()
+            self._check_timeout("search")
+        adm.wrench_des[2] = -cfg.press_force
+        n = max(1, int(round(HOP_PRESS_TIME / robot.dt)))
+        for _ in range(n):
+            robot.tick()
+            self._watch()
+        return robot.arm.tcp_height()
+
+    def _rub_search(self) -> None:
         robot, cfg = self.robot, self.cfg
         adm = robot.arm.admittance
         adm.wrench_des[:] = [0.0, 0.0, -cfg.press_force, 0.0, 0.0, 0.0]

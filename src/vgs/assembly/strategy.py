@@ -54,6 +54,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vgs.assembly.contact import (
+    HOP_REFERENCE_DISTANCE,
     LENGTH_TOLERANCE,
     MAX_RETRIES,
     RETRY_LIFT,
@@ -261,6 +262,12 @@ class AssemblyModule(ContactPhases):
         tip = p + est.hanging * est.down_sign * R[:, 0]
         R_tilt = Rt @ R
         p_tilt = tip + Rt @ (p - tip)
+        if cfg.search_contact == "hop":
+            # Plane contact where the lowest rim point is certainly on the surface: further
+            # from the nominal centre than the hole's radius plus its largest displacement.
+            lead = self._lowest_rim_offset(R_tilt)[:2]
+            lead = lead / max(float(np.linalg.norm(lead)), 1e-9)
+            target_xy = self.hole_xy + HOP_REFERENCE_DISTANCE * lead
         # Place the lowest rim point above the target at the start height.
         low = tip + self._lowest_rim_offset(R_tilt)
         # Down to where the longest peg the product data allows, held at its end, would be

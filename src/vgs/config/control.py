@@ -118,6 +118,8 @@ class AssemblyConfig:
     wiggle_period: float = 1.0
     align_gain: float = 0.5
     insert_speed: float = 0.003
+    search_contact: str = "rub"
+    hop_step: float = 0.004
     timeouts: tuple[tuple[str, float], ...] = (
         ("transport", 20.0),
         ("approach", 20.0),
