@@ -362,8 +362,17 @@ class ContactPhases:
                     break
             self._check_timeout("slide")
         self.z_three = min(z_low, robot.arm.tcp_height())
-        if self.z_three > self.z_search - self.cfg.drop_threshold:
-            raise Recovery  # the peg is back on the surface: the drop was not the hole
+        if self.z_three > self.z_search - self._three_point_depth():
+            # Still, but not fallen in: the lower face rests across the rim, not in the hole.
+            raise Recovery
+
+    def _three_point_depth(self) -> float:
+        """Least descent below the plane contact that three-point contact implies [m]: the
+        tilted lower face inside the hole, its lowest rim point against the far wall, the
+        opposite rim at the top edge lies ``D sin(tilt)`` (3.1 mm for the nominal 30 mm peg at
+        6 deg) below the plane contact; a third of it leaves room for the peg's turn in the
+        pads during the slide and the contact model's compliance."""
+        return self.peg.diameter / 3.0 * math.sin(math.radians(self.cfg.search_tilt_deg))
 
     def align(self) -> None:
         """Wiggle alignment (Fig. 3c): each adjustment turns the peg back towards upright about
@@ -396,13 +405,21 @@ class ContactPhases:
             z = robot.arm.tcp_pose()[0][2]
             # Aligned: the peg slid into the hole (which a tilt much above delta forbids) and
             # the contact moment has relaxed.
-            if z < self.z_three - ENTRY_DEPTH and abs(self._moment()) < self.aligned_moment:
+            if (z < self.z_three - ENTRY_DEPTH and abs(self._moment()) < self.aligned_moment
+                    and abs(self._measured_tilt()) < self.delta):
                 return
             self._check_timeout("align")
 
     def _commanded_tilt(self) -> float:
         """Signed angle of the commanded peg axis from vertical, about the tilt axis."""
         down = self._down()
+        return math.atan2(float(np.dot(np.cross([0.0, 0.0, -1.0], down), self.tilt_axis)),
+                          float(-down[2]))
+
+    def _measured_tilt(self) -> float:
+        """Signed angle of the tool's peg axis from vertical about the tilt axis, from the
+        measured joint angles (the peg's turn in the pads is not in it)."""
+        down = self.estimate.down_sign * self.robot.arm.tcp_pose()[1][:, 0]
         return math.atan2(float(np.dot(np.cross([0.0, 0.0, -1.0], down), self.tilt_axis)),
                           float(-down[2]))
 

@@ -213,8 +213,9 @@ class EpisodeRunner:
             record.failure_reason = "grasp"
             return record, robot, hm
         nominal = self.cfg.cell.peg
-        module = AssemblyModule(robot, self.cfg.assembly, nominal, self.cfg.cell.hole.nominal_xy,
-                                self.cfg.cell.hole.depth)
+        hole = self.cfg.cell.hole
+        module = AssemblyModule(robot, self.cfg.assembly, nominal, hole.nominal_xy, hole.depth,
+                                hole.clearance)
         watch = GraspWatch(robot)
         robot.observers.append(watch)
         module.run(record)

@@ -96,10 +96,12 @@ class AssemblyModule(ContactPhases):
         nominal_peg: Nominal peg data (the product drawing the controller knows).
         nominal_hole_xy: Nominal hole centre (the fixture drawing) [m].
         hole_surface_z: Nominal height of the hole's top face [m].
+        hole_clearance: Nominal diametral clearance of the hole (the fixture drawing) [m].
     """
 
     def __init__(self, robot: Robot, cfg: AssemblyConfig, nominal_peg: PegConfig,
-                 nominal_hole_xy: tuple[float, float], hole_surface_z: float) -> None:
+                 nominal_hole_xy: tuple[float, float], hole_surface_z: float,
+                 hole_clearance: float) -> None:
         self.robot = robot
         self.cfg = cfg
         self.peg = nominal_peg
@@ -116,6 +118,8 @@ class AssemblyModule(ContactPhases):
         self.capacity = grasp_moment_capacity(robot.cell.cfg.gripper)
         self.moment_limit = cfg.moment_limit_fraction * self.capacity
         self.aligned_moment = 0.5 * self.moment_limit
+        # Paper eq. 1: the peg passes the insertion depth K once its tilt is under delta.
+        self.delta = math.atan(hole_clearance / cfg.insertion_depth)
 
     # -- bookkeeping --------------------------------------------------------------------------
 

@@ -107,7 +107,7 @@ class AssemblyConfig:
     spiral_pitch: float = 0.004
     spiral_speed: float = 0.01
     search_radius: float = 0.02
-    drop_threshold: float = 0.001
+    drop_threshold: float = 0.0005
     slide_speed: float = 0.01
     three_point_force: float = 2.0
     slide_press_force: float = 2.0
@@ -115,10 +115,10 @@ class AssemblyConfig:
     insert_stiffness: float = 300.0
     moment_limit_fraction: float = 0.5
     wiggle_amplitude_deg: float = 1.0
-    wiggle_period: float = 1.0
-    align_gain: float = 0.5
+    wiggle_period: float = 3.0
+    align_gain: float = 0.0
     insert_speed: float = 0.003
-    search_contact: str = "rub"
+    search_contact: str = "hop"
     hop_step: float = 0.004
     timeouts: tuple[tuple[str, float], ...] = (
         ("transport", 20.0),
