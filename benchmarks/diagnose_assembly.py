@@ -63,6 +63,8 @@ class EpisodeDiagnosis:
     retries: int
     peak_grasp_moment: float
     phases: dict[str, PhaseStats]
+    time: float = math.nan  # assembly time [s]
+    sequence: str = ""  # the phases in the order they ran, e.g. "search slide search slide ..."
 
 
 _RUNNER = None
@@ -111,7 +113,10 @@ def _diagnose(job: tuple[float, int, int]) -> EpisodeDiagnosis:
     axis0 = None
     visit_start = 0.0  # turn when the current visit of a phase began
     prev_phase, prev_time, prev_turn = None, 0.0, 0.0
+    visits: list[str] = []
     for t, phase, wrench, data in _replay(robot):
+        if not visits or visits[-1] != phase:
+            visits.append(phase)
         R_world_tcp = data.site_xmat[ids.tcp_site].reshape(3, 3)
         peg_axis = data.xmat[ids.peg_body].reshape(3, 3)[:, 2]
         axis_tcp = R_world_tcp.T @ peg_axis
@@ -131,7 +136,8 @@ def _diagnose(job: tuple[float, int, int]) -> EpisodeDiagnosis:
         phases[prev_phase].turn_deg += prev_turn - visit_start
     return EpisodeDiagnosis(offset_mm, scene, bool(record.success),
                             record.failure_reason or "", int(record.retries),
-                            float(record.peak_grasp_moment), phases)
+                            float(record.peak_grasp_moment), phases,
+                            float(record.assembly_time), " ".join(visits[2:]))
 
 
 def trace_episode(sets: list[tuple[str, object]], offset_mm: float, scene: int, root: int,
@@ -209,7 +215,9 @@ def main(argv: list[str] | None = None) -> int:
                              if ph != "transport")
             print(f"  {r.offset_mm:+6.1f} mm scene {r.scene:3d} "
                   f"{'ok  ' if r.success else 'FAIL'} {r.failure:16s} retries {r.retries} "
-                  f"peak {r.peak_grasp_moment:.2f} N m  turn {turns}")
+                  f"time {r.time:5.1f} s peak {r.peak_grasp_moment:.2f} N m  turn {turns}")
+            if r.retries:
+                print(f"      phases: {r.sequence}")
     for offset in offsets:
         rows = [r for r in results if r.offset_mm == offset]
         fails = collections.Counter(r.failure for r in rows if not r.success)
@@ -217,7 +225,12 @@ def main(argv: list[str] | None = None) -> int:
               f"retries {np.mean([r.retries for r in rows]):.2f} per episode, "
               f"peak grasp moment median {np.median([r.peak_grasp_moment for r in rows]):.3f} "
               f"N m, failures {dict(fails)}")
-        print(f"  {'phase':9s} {'time [s]':>9s} {'Fz [N]':>7s} {'Fz sd':>6s} "
+        times = np.array([r.time for r in rows if r.success])
+        if len(times) > 1:
+            print(f"  assembled: time {times.mean():.1f} s, sd {times.std(ddof=1):.1f} s, "
+                  f"CV {times.std(ddof=1) / times.mean():.2f}; re-search in "
+                  f"{sum(r.retries > 0 for r in rows)}/{len(rows)} episodes")
+        print(f"  {'phase':9s} {'time [s]':>9s} {'sd [s]':>6s} {'Fz [N]':>7s} {'Fz sd':>6s} "
               f"{'turn mean':>9s} {'turn max':>8s} {'tilt end':>8s}")
         for phase in PHASES:
             have = [r.phases[phase] for r in rows if phase in r.phases]
@@ -226,7 +239,9 @@ def main(argv: list[str] | None = None) -> int:
             fz = np.concatenate([np.asarray(p.fz) for p in have])
             sd = np.mean([np.std(p.fz) for p in have])
             turns = [p.turn_deg for p in have]
-            print(f"  {phase:9s} {np.mean([p.duration for p in have]):9.1f} {fz.mean():7.2f} "
+            durations = [p.duration for p in have]
+            print(f"  {phase:9s} {np.mean(durations):9.1f} {np.std(durations):6.1f} "
+                  f"{fz.mean():7.2f} "
                   f"{sd:6.2f} {np.mean(turns):9.2f} {np.max(turns):8.2f} "
                   f"{np.nanmean([p.tilt_end_deg for p in have]):8.2f}")
     return 0

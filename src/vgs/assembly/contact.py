@@ -38,9 +38,6 @@ RETRY_LIFT = 0.012  # lift before a new search [m]
 ROT_COMPLIANCE_ANGLE = math.radians(2.0)  # reference lead that loads the grasp to its limit
 
 
-SLIDE_FILTER_TIME = 0.1  # time constant of the lateral reaction filter in the slide [s]
-
-
 PROBE_TIME = 0.3  # pressing without lateral bias to read the edge's reaction [s]
 
 
@@ -334,37 +331,48 @@ class ContactPhases:
             f_probe += robot.arm.wrench[:2] / n_probe
         if float(np.linalg.norm(f_probe)) > PROBE_FORCE:
             lead = f_probe / float(np.linalg.norm(f_probe))
-        adm.wrench_des[:] = [*(cfg.three_point_force * lead), -cfg.slide_press_force, 0.0, 0.0, 0.0]
-        f_lat = np.zeros(2)
-        alpha = robot.dt / (SLIDE_FILTER_TIME + robot.dt)
+        self.slide_start = robot.arm.tcp_pose()[0][:2]
+        # Slide along the lead until the rim meets the wall. Stopped with the lower face across
+        # the rim (the wall met off the tilt plane, where friction holds the rim), follow the
+        # wall: a bias across the lead, one side and then the other, slides the rim along the
+        # wall; where the lower face comes over the hole the peg falls in.
+        perp = np.array([-lead[1], lead[0]])
+        for side in (0.0, 1.0, -1.0):
+            if self._slide_to_rest(lead + side * perp):
+                return
+        raise Recovery  # the lower face did not fall in anywhere along the wall
+
+    def _slide_to_rest(self, direction: np.ndarray) -> bool:
+        """Slide with a lateral bias of ``three_point_force`` along ``direction`` (pressing
+        with ``slide_press_force``) until the TCP stands still; return whether it came to rest
+        fallen into the hole: three-point contact (Figure 2c) from the robot's own state, the
+        TCP still and ``_three_point_depth`` below the plane contact, where the lateral force
+        the sensor measures balances the bias."""
+        robot, cfg = self.robot, self.cfg
+        adm = robot.arm.admittance
+        direction = direction / float(np.linalg.norm(direction))
+        adm.wrench_des[:] = [*(cfg.three_point_force * direction), -cfg.slide_press_force,
+                             0.0, 0.0, 0.0]
         window = max(1, int(round(THREE_POINT_TIME / robot.dt)))
-        start = robot.arm.tcp_pose()[0][:2]
-        last = start
-        z_low = robot.arm.tcp_height()
+        last = robot.arm.tcp_pose()[0][:2]
         n = 0
         while True:
             robot.tick()
             self._watch()
-            f_lat += alpha * (robot.arm.wrench[:2] - f_lat)
             n += 1
             # The rim cannot travel further than across the hole, nor climb back onto the
             # surface, while it is in the hole: the drop was not the hole.
-            if (np.linalg.norm(robot.arm.tcp_pose()[0][:2] - start) > self.peg.diameter
+            if (np.linalg.norm(robot.arm.tcp_pose()[0][:2] - self.slide_start) > self.peg.diameter
                     or robot.arm.tcp_height() > self.z_search + cfg.drop_threshold):
                 raise Recovery
-            z_low = min(z_low, robot.arm.tcp_height())
             if n % window == 0:
                 now = robot.arm.tcp_pose()[0][:2]
                 moving = np.linalg.norm(now - last) > 0.25 * cfg.slide_speed * THREE_POINT_TIME
                 last = now
-                balanced = float(np.dot(f_lat, lead)) < -0.7 * cfg.three_point_force
-                if balanced and not moving:
-                    break
+                if not moving:
+                    self.z_three = robot.arm.tcp_height()
+                    return self.z_three < self.z_search - self._three_point_depth()
             self._check_timeout("slide")
-        self.z_three = min(z_low, robot.arm.tcp_height())
-        if self.z_three > self.z_search - self._three_point_depth():
-            # Still, but not fallen in: the lower face rests across the rim, not in the hole.
-            raise Recovery
 
     def _three_point_depth(self) -> float:
         """Least descent below the plane contact that three-point contact implies [m]: the

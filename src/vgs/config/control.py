@@ -104,7 +104,7 @@ class AssemblyConfig:
     contact_force: float = 2.0
     press_force: float = 5.0
     search_tilt_deg: float = 6.0
-    spiral_pitch: float = 0.004
+    spiral_pitch: float = 0.006
     spiral_speed: float = 0.01
     search_radius: float = 0.02
     drop_threshold: float = 0.0005
@@ -119,7 +119,7 @@ class AssemblyConfig:
     align_gain: float = 0.0
     insert_speed: float = 0.003
     search_contact: str = "hop"
-    hop_step: float = 0.004
+    hop_step: float = 0.006
     timeouts: tuple[tuple[str, float], ...] = (
         ("transport", 20.0),
         ("approach", 20.0),
