@@ -8,7 +8,6 @@ constants and the exceptions of the strategy live here.
 from __future__ import annotations
 
 import math
-from collections import deque
 
 import numpy as np
 
@@ -38,22 +37,16 @@ RETRY_LIFT = 0.012  # lift before a new search [m]
 ROT_COMPLIANCE_ANGLE = math.radians(2.0)  # reference lead that loads the grasp to its limit
 
 
-PROBE_TIME = 0.3  # pressing without lateral bias to read the edge's reaction [s]
+SLIDE_SETTLE_TIME = 0.3  # light press on the rim before the slide's bias [s]
 
 
-PROBE_FORCE = 0.5  # a lateral reaction above this gives the slide's direction [N]
-
-
-CATCH_TIME = 0.3  # the spiral held back this long: the rim is caught by the hole's edge [s]
-
-
-THREE_POINT_TIME = 0.3  # balanced and still this long: three-point contact [s]
-
-
-Z_FILTER_TIME = 0.1  # time constant of the TCP-height filter in the search [s]
+THREE_POINT_TIME = 0.3  # moved less than a quarter of the slide speed in this time: still [s]
 
 
 MAX_RETRIES = 3  # new searches after a wrong contact-state decision
+
+
+ALIGN_STEP = math.radians(3.0)  # largest turn towards upright of one alignment adjustment
 
 
 MAX_ALIGN_ADJUSTMENTS = 15  # adjustments in one alignment before it is judged lost
@@ -62,7 +55,10 @@ MAX_ALIGN_ADJUSTMENTS = 15  # adjustments in one alignment before it is judged l
 MAX_INSERT_STALLS = 4  # consecutive stalled wiggles before the insertion is judged lost
 
 
-HOP_REFERENCE_DISTANCE = 0.035  # plane contact this far from the nominal hole centre [m]
+GOLDEN_ANGLE = math.pi * (3.0 - math.sqrt(5.0))  # turn of each new search's spiral [rad]
+
+
+PLANE_CONTACT_MARGIN = 0.004  # plane contact this far beyond the hole's reach [m]
 
 
 HOP_HEIGHT = 0.001  # lift of the lowest rim point above the plane between two hops [m]
@@ -80,13 +76,11 @@ HOP_SETTLE = 0.1  # still time before each touch-down [s]
 HOP_DESCENT_SPEED = 0.003  # speed of each touch-down [m/s]
 
 
-HOP_LATERAL_STIFFNESS = 0.0  # lateral admittance stiffness of a touch-down [N/m]
+# Rotational admittance stiffness of a touch-down [N m/rad]: the 5 N press at the lowest rim
+# point, about 10 mm beside the pads, turns the tool by 0.03 deg; with the contact phases'
+# compliance (6.4 N m/rad) each touch-down on an edge rocked the peg by tenths of a degree.
+HOP_ROT_STIFFNESS = 100.0
 
-
-HOP_ROT_STIFFNESS = 100.0  # rotational admittance stiffness of a touch-down [N m/rad]; 0: default
-
-
-DROP_WINDOW = 3.0  # the drop is measured against the highest TCP height of this window [s]
 
 
 class Recovery(Exception):
@@ -183,12 +177,6 @@ class ContactPhases:
         self._check_grasp()
 
     def search(self) -> None:
-        if self.cfg.search_contact == "hop":
-            self._hop_search()
-        else:
-            self._rub_search()
-
-    def _hop_search(self) -> None:
         """Archimedes spiral of touch-downs: the lowest rim point is lifted, carried in free
         air to the next point of the spiral around the nominal hole and lowered until the
         contact force reaches ``contact_force``; pressed with ``press_force``, the TCP height
@@ -196,26 +184,30 @@ class ContactPhases:
         ``drop_threshold``: two-point contact (Figure 2b). Nothing rubs, so no friction turns
         the peg in the pads."""
         robot, cfg = self.robot, self.cfg
-        if self.retries == 0:
-            self.z_plane = robot.arm.tcp_height()
-            self.hop_index = 0
+        # The approach ended in plane contact with the rim point on the surface: every depth
+        # of this search is measured from here (a new search measures again: the peg may
+        # have turned in the pads since).
+        self.z_plane = robot.arm.tcp_height()
+        # Every new search starts at the centre again, its spiral turned by the golden angle:
+        # the hole is likeliest near the nominal centre, and the points of the last spiral led
+        # to a wrong contact state.
+        phase = self.retries * GOLDEN_ANGLE
         self.R_search = robot.arm.R_ref.copy()
         b = cfg.spiral_pitch / (2 * math.pi)
         low = self.low_rim_from_tcp[:2]
+        theta = 0.0
         while True:
-            # Points spaced hop_step along the spiral r = b theta: d(theta) = step / |r'|.
-            k = self.hop_index
-            self.hop_index += 1
-            theta = self.hop_theta if k > 0 else 0.0
             r = b * theta
             if r > cfg.search_radius:
                 theta, r = 0.0, 0.0
-            self.hop_theta = theta + cfg.hop_step / math.hypot(r, b * 2)
-            target = self.hole_xy + r * np.array([math.cos(theta), math.sin(theta)])
+                phase += GOLDEN_ANGLE
+            target = self.hole_xy + r * np.array([math.cos(theta + phase),
+                                                  math.sin(theta + phase)])
+            # The next point about hop_step further along the spiral r = b theta (half a turn
+            # from the centre to the second point).
+            theta += cfg.hop_step / math.hypot(r, 2 * b)
             z = self._touch_down(target - low)
             if self.z_plane - z > cfg.drop_threshold:
-                self.z_search = self.z_plane
-                self.detected_by = "hop"
                 return
             self._check_timeout("search")
 
@@ -236,7 +228,7 @@ class ContactPhases:
         robot.move_to(p, self.R_search, speed=HOP_SPEED, settle=HOP_SETTLE)
         self._watch()
         robot.arm.set_compliant(True)
-        self._comply(HOP_LATERAL_STIFFNESS, k_rot=HOP_ROT_STIFFNESS or None)
+        self._comply(0.0, k_rot=HOP_ROT_STIFFNESS)
         adm.wrench_des[:] = 0.0
         adm.wrench_des[2] = -adm.damping[2] * HOP_DESCENT_SPEED
         while robot.arm.wrench[2] < cfg.contact_force:
@@ -250,92 +242,26 @@ class ContactPhases:
             self._watch()
         return robot.arm.tcp_height()
 
-    def _rub_search(self) -> None:
-        robot, cfg = self.robot, self.cfg
-        adm = robot.arm.admittance
-        adm.wrench_des[:] = [0.0, 0.0, -cfg.press_force, 0.0, 0.0, 0.0]
-        robot.arm.absorb_offset()
-        self._comply(cfg.search_stiffness)
-        center = robot.arm.p_ref[:2].copy()
-        theta = 0.0
-        b = cfg.spiral_pitch / (2 * math.pi)
-        # Sliding maximum of the filtered height over the last n_window ticks: a deque of
-        # (tick, height) with decreasing heights, so the maximum is its first entry.
-        window: deque[tuple[int, float]] = deque()
-        n_window = max(1, int(round(DROP_WINDOW / robot.dt)))
-        alpha = robot.dt / (Z_FILTER_TIME + robot.dt)
-        tcp_z = robot.cell.data.site_xpos[robot.cell.ids.tcp_site, 2:3]
-        z_f = float(tcp_z[0])
-        settle_ticks = int(round(SETTLE_TIME / robot.dt))
-        p_ref = robot.arm.p_ref.copy()
-        tick = 0
-        caught = 0
-        n_caught = max(1, int(round(CATCH_TIME / robot.dt)))
-        while True:
-            r = b * theta
-            if r > cfg.search_radius:
-                theta, r = 0.0, 0.0  # start the spiral again from its centre
-            # The spiral advances while the grasp carries less than the moment limit; held
-            # back by the hole's edge (the rim caught in it), it waits: loading the pads
-            # further would only turn the peg in them.
-            if self._tilt_moment() < self.moment_limit:
-                # d(theta)/dt = v / sqrt(r^2 + b^2): constant tangential speed.
-                theta += cfg.spiral_speed * robot.dt / math.hypot(r, b * 2)
-                caught = 0
-            else:
-                caught += 1
-            p_ref[2] = robot.arm.p_ref[2]
-            p_ref[0] = center[0] + r * math.cos(theta)
-            p_ref[1] = center[1] + r * math.sin(theta)
-            robot.arm.set_reference(p_ref, robot.arm.R_ref)
-            robot.tick()
-            self._watch()
-            # Low-pass filtered TCP height: the rubbing spiral's stick-slip makes it chatter.
-            z_f += alpha * (float(tcp_z[0]) - z_f)
-            while window and window[-1][1] <= z_f:
-                window.pop()
-            window.append((tick, z_f))
-            if window[0][0] <= tick - n_window:
-                window.popleft()
-            tick += 1
-            settle_ticks -= 1
-            # A drop below the recent height: the leading rim fell over the hole edge.
-            z_max = window[0][1]
-            if settle_ticks < 0 and (z_f < z_max - cfg.drop_threshold or caught >= n_caught):
-                # A drop, or the rim held by an edge: two-point contact.
-                self.detected_by = "drop" if z_f < z_max - cfg.drop_threshold else "caught"
-                self.z_search = z_max
-                break
-            self._check_timeout("search")
-
     def slide(self) -> None:
-        """Two-point contact (Fig. 3a): pressing on, the lateral axes are force-controlled with
-        a bias towards the lowest rim point; the hole's reaction and the bias slide the peg
-        until the rim meets the far wall. Three-point contact (Fig. 2c) from the F/T signal:
-        the measured lateral force balances the bias (the wall pushes back) while the TCP
-        stands still."""
+        """Two-point contact (Fig. 2b, 3a): the lowest rim point is in the hole, the lower face
+        rests on the rim. Pressing lightly with free lateral axes, a lateral bias along the
+        tilt plane, lowest rim point leading, slides the peg until the rim point meets the
+        wall; there the tilted face lies over the hole and the peg falls in: three-point
+        contact (Fig. 2c). Come to rest with the face across the rim (the wall met off the
+        tilt plane, where friction holds the rim point), the slide follows the wall: the bias
+        turned 45 deg to one side and then to the other slides the rim point along it."""
         robot, cfg = self.robot, self.cfg
         adm = robot.arm.admittance
         robot.arm.absorb_offset()
         lead = self.low_rim_from_tcp[:2] / max(np.linalg.norm(self.low_rim_from_tcp[:2]), 1e-9)
         # Lateral damping for a free sliding speed of slide_speed under the bias.
         self._comply(0.0, lateral_damping=cfg.three_point_force / cfg.slide_speed)
-        # Which way is the hole's centre (Fig. 3a): pressing with free lateral axes and no
-        # bias, the sum of the edge's reactions is the lateral force the sensor measures.
+        # Settle onto the rim under the light press before the bias.
         adm.wrench_des[:] = [0.0, 0.0, -cfg.slide_press_force, 0.0, 0.0, 0.0]
-        f_probe = np.zeros(2)
-        n_probe = max(1, int(round(PROBE_TIME / robot.dt)))
-        for _ in range(n_probe):
+        for _ in range(max(1, int(round(SLIDE_SETTLE_TIME / robot.dt)))):
             robot.tick()
             self._watch()
-            f_probe += robot.arm.wrench[:2] / n_probe
-        if float(np.linalg.norm(f_probe)) > PROBE_FORCE:
-            lead = f_probe / float(np.linalg.norm(f_probe))
         self.slide_start = robot.arm.tcp_pose()[0][:2]
-        # Slide along the lead until the rim meets the wall. Stopped with the lower face across
-        # the rim (the wall met off the tilt plane, where friction holds the rim), follow the
-        # wall: a bias across the lead, one side and then the other, slides the rim along the
-        # wall; where the lower face comes over the hole the peg falls in.
         perp = np.array([-lead[1], lead[0]])
         for side in (0.0, 1.0, -1.0):
             if self._slide_to_rest(lead + side * perp):
@@ -346,8 +272,8 @@ class ContactPhases:
         """Slide with a lateral bias of ``three_point_force`` along ``direction`` (pressing
         with ``slide_press_force``) until the TCP stands still; return whether it came to rest
         fallen into the hole: three-point contact (Figure 2c) from the robot's own state, the
-        TCP still and ``_three_point_depth`` below the plane contact, where the lateral force
-        the sensor measures balances the bias."""
+        TCP still (the lateral force the sensor measures then balances the bias) and
+        ``_three_point_depth`` below the plane contact."""
         robot, cfg = self.robot, self.cfg
         adm = robot.arm.admittance
         direction = direction / float(np.linalg.norm(direction))
@@ -360,10 +286,10 @@ class ContactPhases:
             robot.tick()
             self._watch()
             n += 1
-            # The rim cannot travel further than across the hole, nor climb back onto the
-            # surface, while it is in the hole: the drop was not the hole.
+            # The rim point cannot travel further than across the hole, nor climb back onto
+            # the surface, while it is in the hole: the wrong contact state.
             if (np.linalg.norm(robot.arm.tcp_pose()[0][:2] - self.slide_start) > self.peg.diameter
-                    or robot.arm.tcp_height() > self.z_search + cfg.drop_threshold):
+                    or robot.arm.tcp_height() > self.z_plane + cfg.drop_threshold):
                 raise Recovery
             if n % window == 0:
                 now = robot.arm.tcp_pose()[0][:2]
@@ -371,7 +297,7 @@ class ContactPhases:
                 last = now
                 if not moving:
                     self.z_three = robot.arm.tcp_height()
-                    return self.z_three < self.z_search - self._three_point_depth()
+                    return self.z_three < self.z_plane - self._three_point_depth()
             self._check_timeout("slide")
 
     def _three_point_depth(self) -> float:
@@ -399,35 +325,25 @@ class ContactPhases:
             if self.adjustments - start_adjustments >= MAX_ALIGN_ADJUSTMENTS:
                 raise Recovery
             robot.arm.absorb_offset()
-            tilt = self._commanded_tilt()
-            moment = self._moment()
-            # Rotate back towards upright: the commanded tilt, corrected by the measured moment
-            # (a contact moment about the pinch axis says the peg bears on one side).
-            step = -tilt + cfg.align_gain * moment
-            step = max(-math.radians(3.0), min(math.radians(3.0), step))
+            # Rotate back towards upright, at most ALIGN_STEP per adjustment.
+            step = max(-ALIGN_STEP, min(ALIGN_STEP, -self._tilt(robot.arm.R_ref)))
             self._rotate_about_tip(step, n_wiggle // 2)
             # One wiggle: +amp, -amp, back, about the estimated lower end.
             for sgn in (1.0, -2.0, 1.0):
                 self._rotate_about_tip(sgn * amp, n_wiggle // 4)
             self.adjustments += 1
             z = robot.arm.tcp_pose()[0][2]
-            # Aligned: the peg slid into the hole (which a tilt much above delta forbids) and
-            # the contact moment has relaxed.
+            # Aligned (paper eq. 1): the tool's tilt, from the measured joint angles, is under
+            # delta, the peg has slid into the hole and the contact moment has relaxed.
             if (z < self.z_three - ENTRY_DEPTH and abs(self._moment()) < self.aligned_moment
-                    and abs(self._measured_tilt()) < self.delta):
+                    and abs(self._tilt(robot.arm.tcp_pose()[1])) < self.delta):
                 return
             self._check_timeout("align")
 
-    def _commanded_tilt(self) -> float:
-        """Signed angle of the commanded peg axis from vertical, about the tilt axis."""
-        down = self._down()
-        return math.atan2(float(np.dot(np.cross([0.0, 0.0, -1.0], down), self.tilt_axis)),
-                          float(-down[2]))
-
-    def _measured_tilt(self) -> float:
-        """Signed angle of the tool's peg axis from vertical about the tilt axis, from the
-        measured joint angles (the peg's turn in the pads is not in it)."""
-        down = self.estimate.down_sign * self.robot.arm.tcp_pose()[1][:, 0]
+    def _tilt(self, R_world_tcp: np.ndarray) -> float:
+        """Signed angle from vertical, about the tilt axis, of the peg axis of tool attitude
+        ``R_world_tcp`` (the peg's turn in the pads is not in it)."""
+        down = self.estimate.down_sign * R_world_tcp[:, 0]
         return math.atan2(float(np.dot(np.cross([0.0, 0.0, -1.0], down), self.tilt_axis)),
                           float(-down[2]))
 

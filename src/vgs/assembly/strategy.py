@@ -2,7 +2,7 @@
 
 Phases, each with its own timeout, every decision from the F/T signal and the robot's own joint
 state (never the hole's true pose, the peg's true pose or the contact list). The module knows
-the nominal product data (peg length, diameter, mass), the nominal hole position and its own
+the nominal product data (peg length, diameter, mass), the nominal hole (position, diameter) and its own
 hardware (the grasp's moment capacity, the tool's mass); it is not told where the peg is held
 and does not estimate it. docs/assembly.md states every phase with its numbers.
 
@@ -16,27 +16,31 @@ and does not estimate it. docs/assembly.md states every phase with its numbers.
     The nominal peg is added to the payload model and the F/T sensor is tared once at this
     upright pose (the payload's weight is compensated from then on). The peg is tilted by the
     search tilt about the pinch axis, a fixed world direction, and lowered in a guarded
-    force-controlled descent until the vertical contact force exceeds ``contact_force``: plane
-    contact (Figure 2a).
+    force-controlled descent, its lowest rim point beyond the hole's reach (further from the
+    nominal centre than twice the hole's radius), until the vertical contact force exceeds
+    ``contact_force``: plane contact (Figure 2a), whose TCP height is the reference of the
+    search.
 ``search``
-    Force control in z (press with ``press_force``), the lowest rim point driven along an
-    Archimedes spiral ``r = pitch * theta / (2 pi)`` around the nominal hole centre at constant
-    tangential speed; the spiral waits while the measured tilting moment exceeds the moment
-    limit. A drop of the filtered TCP height by ``drop_threshold`` below its recent maximum, or
-    the spiral held back for ``CATCH_TIME``: two-point contact (Figure 2b).
+    An Archimedes spiral ``r = pitch * theta / (2 pi)`` of touch-downs around the nominal hole
+    centre: the lowest rim point is lifted, carried in free air to the next point and lowered
+    until the contact force reaches ``contact_force``, pressed with ``press_force``. Sunk by
+    ``drop_threshold`` below the plane contact: the rim point is in the hole, two-point contact
+    (Figure 2b). Nothing rubs, so no friction turns the peg in the pads.
 ``slide``
-    A short probe with free lateral axes reads the sum of the edge's reactions, which points to
-    the hole's centre (Figure 3a); a lateral bias along it slides the peg until the measured
-    lateral force balances the bias and the TCP stands still: three-point contact (Figure 2c).
-    Back at the search height, or further than a diameter: the drop was not the hole.
+    Pressing lightly with free lateral axes, a lateral bias along the tilt plane (lowest rim
+    point leading) slides the peg until the rim point meets the wall and the tilted face, now
+    over the hole, falls in: the TCP at rest below the plane contact by a third of
+    ``D sin(tilt)`` is three-point contact (Figure 2c). At rest with the face across the rim,
+    the bias turns 45 deg to either side and the rim point follows the wall. Back at the plane's
+    height, or further than a diameter: the wrong contact state, search again.
 ``align``
-    Wiggle alignment, bias cleared: each adjustment rotates the peg back towards upright about
-    its nominal lower end by an amount set by the measured contact moment, superposes one
-    wiggle, each rotation stopped at the moment limit, and checks whether the peg has slid into
-    the hole (TCP below the three-point height by ``ENTRY_DEPTH``) with a small moment. The
-    measured moment contains the peg's gravitational and inertial disturbing moments about the
-    pads (paper eq. 2, 3), which depend on where the peg is held: the controller cannot tell
-    them from contact moments.
+    Wiggle alignment: each adjustment rotates the peg back towards upright about its nominal
+    lower end (at most 3 deg), superposes one wiggle, each rotation stopped at the moment limit,
+    and checks whether the tool's tilt is under ``delta = arctan(clearance / K)`` (eq. 1), the
+    peg has slid into the hole (TCP below the three-point height by ``ENTRY_DEPTH``) and the
+    moment has relaxed. The measured moment contains the peg's gravitational and inertial
+    disturbing moments about the pads (paper eq. 2, 3), which depend on where the peg is held:
+    the controller cannot tell them from contact moments.
 ``insert``
     Force-controlled push to the insertion depth K; a stall triggers one more wiggle adjustment.
     Then the gripper opens and the arm retracts.
@@ -54,9 +58,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from vgs.assembly.contact import (
-    HOP_REFERENCE_DISTANCE,
     LENGTH_TOLERANCE,
     MAX_RETRIES,
+    PLANE_CONTACT_MARGIN,
     RETRY_LIFT,
     SETTLE_TIME,
     ContactPhases,
@@ -120,6 +124,7 @@ class AssemblyModule(ContactPhases):
         self.aligned_moment = 0.5 * self.moment_limit
         # Paper eq. 1: the peg passes the insertion depth K once its tilt is under delta.
         self.delta = math.atan(hole_clearance / cfg.insertion_depth)
+        self.hole_radius = 0.5 * (nominal_peg.diameter + hole_clearance)
 
     # -- bookkeeping --------------------------------------------------------------------------
 
@@ -245,12 +250,8 @@ class AssemblyModule(ContactPhases):
         if self.retries == 0:
             robot.arm.set_payload(self.peg.mass)  # nominal mass, at the pads
             robot.arm.tare()  # once, at the nominal upright pose
-            target_xy = self.hole_xy
         else:
-            # Recovery: out of the hole, upright again, and a new search around the nominal
-            # hole (it lies within its radius of the nominal centre).
-            target_xy = self.hole_xy
-            # Out of the hole first (above the first plane contact), then turn.
+            # Recovery: out of the hole first (above the first plane contact), then turn.
             p = robot.arm.p_ref.copy()
             p[2] = max(p[2] + RETRY_LIFT, self.z_contact + RETRY_LIFT)
             robot.move_to(p, robot.arm.R_ref, speed=0.02, settle=0.0)
@@ -266,12 +267,11 @@ class AssemblyModule(ContactPhases):
         tip = p + est.hanging * est.down_sign * R[:, 0]
         R_tilt = Rt @ R
         p_tilt = tip + Rt @ (p - tip)
-        if cfg.search_contact == "hop":
-            # Plane contact where the lowest rim point is certainly on the surface: further
-            # from the nominal centre than the hole's radius plus its largest displacement.
-            lead = self._lowest_rim_offset(R_tilt)[:2]
-            lead = lead / max(float(np.linalg.norm(lead)), 1e-9)
-            target_xy = self.hole_xy + HOP_REFERENCE_DISTANCE * lead
+        # Plane contact where the lowest rim point is certainly on the surface: further from
+        # the nominal centre than the hole's radius plus its largest displacement (its radius).
+        lead = self._lowest_rim_offset(R_tilt)[:2]
+        lead = lead / max(float(np.linalg.norm(lead)), 1e-9)
+        target_xy = self.hole_xy + (2.0 * self.hole_radius + PLANE_CONTACT_MARGIN) * lead
         # Place the lowest rim point above the target at the start height.
         low = tip + self._lowest_rim_offset(R_tilt)
         # Down to where the longest peg the product data allows, held at its end, would be

@@ -63,35 +63,40 @@ class AssemblyConfig:
         approach_speed: Speed of the guarded descent to plane contact [m/s]; the descent
             starts where the longest peg the product data allows would clear the surface.
         contact_force: Force threshold that declares plane contact [N].
-        press_force: Constant downward force during search, slide, alignment and insertion
-            [N]. Sized to the grasp: pressed at the rim (15 mm off the axis) and dragged with
-            friction 0.4 at a lever up to 89 mm, 5 N loads the pads with about 0.25 N m, under
-            the moment limit below.
-        search_tilt_deg: Tilt of the peg during the spiral search [deg]; the leading rim point
+        press_force: Downward force of the search's touch-downs, the alignment and the
+            insertion [N]. Sized to the grasp: at the lowest rim point, about 10 mm beside the
+            pads, 5 N loads them with 0.05 N m; on an edge with friction 0.4 at a lever up to
+            89 mm, with 0.18 N m: both under the moment limit below.
+        search_tilt_deg: Tilt of the peg during the spiral search [deg]; its lowest rim point
             drops into the hole first and produces two-point contact.
-        spiral_pitch: Radial growth of the Archimedes spiral per turn [m]; by default the
-            hole's clearance plus the peg radius times the search tilt's sine is not needed: a
-            pitch of a few millimetres makes the leading rim point sweep every point.
-        spiral_speed: Tangential speed of the spiral [m/s].
+        spiral_pitch: Radial growth per turn of the Archimedes spiral of touch-downs [m].
+        hop_step: Distance between two touch-downs along the spiral [m] (from the centre the
+            second lies half a turn on). The rim point sinks ``drop_threshold`` about 5 mm
+            inside the hole's edge at 6 deg, so 6 mm apart the touch-downs cannot step over
+            the hole.
         search_radius: Largest spiral radius [m]; the spiral starts again from its centre
             beyond it (the hole lies within its own radius of the nominal position).
-        drop_threshold: Drop of the TCP below the plane-contact height that declares two-point
-            contact [m].
+        drop_threshold: Depth of a touch-down below the plane contact (TCP height) that declares
+            two-point contact [m]; touch-downs do not rub, so their heights differ by
+            hundredths of a millimetre on the plane.
         slide_speed: Free sliding speed of the slide under its bias [m/s] (the lateral
             damping is the bias over this speed); a quarter of it counts as still.
-        three_point_force: Lateral bias of the slide along the measured reaction [N]; when the
-            measured lateral force balances it and the TCP stands still: three-point contact.
+        three_point_force: Lateral bias of the slide [N]; the TCP at rest (the measured lateral
+            force then balances it) and fallen into the hole: three-point contact.
         slide_press_force: Downward force during the slide [N]: light, so that friction at
             the edge (0.4 x 2 N) leaves the bias free to slide the peg.
-        search_stiffness: Lateral admittance stiffness during the spiral search [N/m].
+        search_stiffness: Lateral admittance stiffness of the guarded descent to plane
+            contact [N/m] (the touch-downs of the search are force-controlled laterally).
         insert_stiffness: Lateral admittance stiffness during insertion [N/m].
         moment_limit_fraction: The controller keeps the measured moment about the pinch axis
             under this fraction of the grasp's capacity
             (:func:`vgs.sim.rg2.grasp_moment_capacity`): its rotational stiffness in contact
             is the limit over 2 deg, and wiggles and turns stop at the limit.
         wiggle_amplitude_deg: Amplitude of the wiggle rotation [deg].
-        wiggle_period: Period of one wiggle [s].
-        align_gain: Rotation per measured contact moment [rad / (N m)] in the alignment phase.
+        wiggle_period: Duration of one alignment adjustment [s]: half for the turn towards
+            upright (up to 3 deg), half for the wiggle. Turned faster (1 s), the arm's tracking
+            error in height reached 2.4 mm and lifted the peg out of the hole
+            (docs/assembly.md).
         insert_speed: Reference speed of the insertion [m/s]: a descent slower than a quarter
             of it over 0.25 s counts as a stall (the push itself is force-controlled: 5 N at
             1500 N s/m moves the peg at about 3.3 mm/s when nothing resists).
@@ -105,7 +110,6 @@ class AssemblyConfig:
     press_force: float = 5.0
     search_tilt_deg: float = 6.0
     spiral_pitch: float = 0.006
-    spiral_speed: float = 0.01
     search_radius: float = 0.02
     drop_threshold: float = 0.0005
     slide_speed: float = 0.01
@@ -116,9 +120,7 @@ class AssemblyConfig:
     moment_limit_fraction: float = 0.5
     wiggle_amplitude_deg: float = 1.0
     wiggle_period: float = 3.0
-    align_gain: float = 0.0
     insert_speed: float = 0.003
-    search_contact: str = "hop"
     hop_step: float = 0.006
     timeouts: tuple[tuple[str, float], ...] = (
         ("transport", 20.0),
@@ -132,14 +134,14 @@ class AssemblyConfig:
     def __post_init__(self) -> None:
         _positive(
             self, "insertion_depth", "approach_height", "contact_force", "press_force",
-            "spiral_pitch", "spiral_speed", "search_radius", "drop_threshold", "slide_speed",
+            "spiral_pitch", "hop_step", "search_radius", "drop_threshold", "slide_speed",
             "three_point_force", "slide_press_force", "approach_speed", "search_stiffness",
             "insert_stiffness", "wiggle_period", "insert_speed", prefix="assembly.",
         )
         if not 0.0 < self.moment_limit_fraction <= 1.0:
             raise ConfigError("assembly.moment_limit_fraction",
                               f"must lie in (0, 1], got {self.moment_limit_fraction!r}")
-        _non_negative(self, "search_tilt_deg", "wiggle_amplitude_deg", "align_gain",
+        _non_negative(self, "search_tilt_deg", "wiggle_amplitude_deg",
                       prefix="assembly.")
         for name, value in self.timeouts:
             if value <= 0:
