@@ -281,16 +281,28 @@ class ContactPhases:
                              0.0, 0.0, 0.0]
         window = max(1, int(round(THREE_POINT_TIME / robot.dt)))
         last = robot.arm.tcp_pose()[0][:2]
+        z_low, xy_low = robot.arm.tcp_height(), last
         n = 0
         while True:
             robot.tick()
             self._watch()
             n += 1
+            xy, z = robot.arm.tcp_pose()[0][:2], robot.arm.tcp_height()
             # The rim point cannot travel further than across the hole, nor climb back onto
             # the surface, while it is in the hole: the wrong contact state.
-            if (np.linalg.norm(robot.arm.tcp_pose()[0][:2] - self.slide_start) > self.peg.diameter
-                    or robot.arm.tcp_height() > self.z_plane + cfg.drop_threshold):
+            if (np.linalg.norm(xy - self.slide_start) > self.peg.diameter
+                    or z > self.z_plane + cfg.drop_threshold):
                 raise Recovery
+            if z < z_low:
+                z_low, xy_low = z, xy
+            elif z > z_low + 0.5 * max(self.z_plane - z_low, 2 * cfg.drop_threshold):
+                # Climbing the far edge: the lower face crossed the hole beside its centre,
+                # too shallow for the wall to stop the rim point. Back to where it lay
+                # deepest, to go on across the lead.
+                adm.wrench_des[:2] = 0.0
+                robot.move_to(robot.arm.p_ref + np.array([*(xy_low - xy), 0.0]),
+                              robot.arm.R_ref, speed=cfg.slide_speed, settle=0.0)
+                return False
             if n % window == 0:
                 now = robot.arm.tcp_pose()[0][:2]
                 moving = np.linalg.norm(now - last) > 0.25 * cfg.slide_speed * THREE_POINT_TIME
@@ -304,9 +316,9 @@ class ContactPhases:
         """Least descent below the plane contact that three-point contact implies [m]: the
         tilted lower face inside the hole, its lowest rim point against the far wall, the
         opposite rim at the top edge lies ``D sin(tilt)`` (3.1 mm for the nominal 30 mm peg at
-        6 deg) below the plane contact; a third of it leaves room for the peg's turn in the
-        pads during the slide and the contact model's compliance."""
-        return self.peg.diameter / 3.0 * math.sin(math.radians(self.cfg.search_tilt_deg))
+        6 deg) below the plane contact. Half of it: a face across the rim 3 mm beside the
+        hole's axis rests 1.3 mm low, a face over the hole 2.2-2.7 mm."""
+        return 0.5 * self.peg.diameter * math.sin(math.radians(self.cfg.search_tilt_deg))
 
     def align(self) -> None:
         """Wiggle alignment (Fig. 3c): each adjustment turns the peg back towards upright about
