@@ -40,6 +40,12 @@ ROT_COMPLIANCE_ANGLE = math.radians(2.0)  # reference lead that loads the grasp 
 SLIDE_SETTLE_TIME = 0.3  # light press on the rim before the slide's bias [s]
 
 
+THREE_POINT_FRACTION = 0.5  # of D sin(tilt): the least depth of three-point contact
+
+
+CLIMB_TRAVEL = 0.003  # rising this far from the slide's deepest point: climbing out [m]
+
+
 THREE_POINT_TIME = 0.3  # moved less than a quarter of the slide speed in this time: still [s]
 
 
@@ -116,27 +122,12 @@ class ContactPhases:
         if self.robot.arm.wrench[2] > 0.5 * self.estimate.weight:
             raise PegLost
 
-    def _down(self) -> np.ndarray:
-        """Estimated peg axis pointing down, from the commanded tool orientation."""
-        return self.estimate.down_sign * self.robot.arm.R_ref[:, 0]
-
-    def _tip(self) -> np.ndarray:
-        """Estimated centre of the peg's lower face, from the measured TCP pose."""
-        p, R = self.robot.arm.tcp_pose()
-        return p + self.estimate.hanging * self.estimate.down_sign * R[:, 0]
-
     def _lowest_rim_offset(self, R_tcp: np.ndarray) -> np.ndarray:
         """Vector from the lower face's centre to its lowest rim point for tool attitude R."""
         axis = self.estimate.down_sign * R_tcp[:, 0]
         v = np.array([0.0, 0.0, -1.0]) - np.dot([0.0, 0.0, -1.0], axis) * axis
         n = np.linalg.norm(v)
         return np.zeros(3) if n < 1e-9 else self.peg.radius * v / n
-
-    def _tilt_moment(self) -> float:
-        """Measured moment about the horizontal axes at the TCP [N m]: what tilts the peg in
-        the pads (about the pinch axis) or rocks it on them."""
-        w = self.robot.arm.wrench
-        return math.hypot(float(w[3]), float(w[4]))
 
     def _moment(self) -> float:
         """Measured moment about the pinch axis at the TCP (the pads) [N m]."""
@@ -295,7 +286,8 @@ class ContactPhases:
                 raise Recovery
             if z < z_low:
                 z_low, xy_low = z, xy
-            elif z > z_low + 0.5 * max(self.z_plane - z_low, 2 * cfg.drop_threshold):
+            elif (z > z_low + 0.5 * max(self.z_plane - z_low, 2 * cfg.drop_threshold)
+                    and np.linalg.norm(xy - xy_low) > CLIMB_TRAVEL):
                 # Climbing the far edge: the lower face crossed the hole beside its centre,
                 # too shallow for the wall to stop the rim point. Back to where it lay
                 # deepest, to go on across the lead.
@@ -318,7 +310,7 @@ class ContactPhases:
         opposite rim at the top edge lies ``D sin(tilt)`` (3.1 mm for the nominal 30 mm peg at
         6 deg) below the plane contact. Half of it: a face across the rim 3 mm beside the
         hole's axis rests 1.3 mm low, a face over the hole 2.2-2.7 mm."""
-        return 0.5 * self.peg.diameter * math.sin(math.radians(self.cfg.search_tilt_deg))
+        return THREE_POINT_FRACTION * self.peg.diameter * math.sin(math.radians(self.cfg.search_tilt_deg))
 
     def align(self) -> None:
         """Wiggle alignment (Fig. 3c): each adjustment turns the peg back towards upright about

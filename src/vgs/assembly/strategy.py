@@ -2,9 +2,9 @@
 
 Phases, each with its own timeout, every decision from the F/T signal and the robot's own joint
 state (never the hole's true pose, the peg's true pose or the contact list). The module knows
-the nominal product data (peg length, diameter, mass), the nominal hole (position, diameter) and its own
-hardware (the grasp's moment capacity, the tool's mass); it is not told where the peg is held
-and does not estimate it. docs/assembly.md states every phase with its numbers.
+the nominal product data (peg length, diameter, mass), the nominal hole (position, diameter)
+and its own hardware (the grasp's moment capacity, the tool's mass); it is not told where the
+peg is held and does not estimate it. docs/assembly.md states every phase with its numbers.
 
 ``transport``
     With the peg still horizontal, the sign of the tared F/T moment ``tau_y = -m g c`` about
