@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 
+from vgs.assembly.spiral import GOLDEN_ANGLE, spiral_points
 from vgs.control.transforms import exp_so3
 
 ROT_DAMPING = 2.5  # lower bound of the rotational admittance damping in contact [N m s/rad]
@@ -59,9 +60,6 @@ MAX_ALIGN_ADJUSTMENTS = 15  # adjustments in one alignment before it is judged l
 
 
 MAX_INSERT_STALLS = 4  # consecutive stalled wiggles before the insertion is judged lost
-
-
-GOLDEN_ANGLE = math.pi * (3.0 - math.sqrt(5.0))  # turn of each new search's spiral [rad]
 
 
 PLANE_CONTACT_MARGIN = 0.004  # plane contact this far beyond the hole's reach [m]
@@ -182,21 +180,10 @@ class ContactPhases:
         # Every new search starts at the centre again, its spiral turned by the golden angle:
         # the hole is likeliest near the nominal centre, and the points of the last spiral led
         # to a wrong contact state.
-        phase = self.retries * GOLDEN_ANGLE
         self.R_search = robot.arm.R_ref.copy()
-        b = cfg.spiral_pitch / (2 * math.pi)
         low = self.low_rim_from_tcp[:2]
-        theta = 0.0
-        while True:
-            r = b * theta
-            if r > cfg.search_radius:
-                theta, r = 0.0, 0.0
-                phase += GOLDEN_ANGLE
-            target = self.hole_xy + r * np.array([math.cos(theta + phase),
-                                                  math.sin(theta + phase)])
-            # The next point about hop_step further along the spiral r = b theta (half a turn
-            # from the centre to the second point).
-            theta += cfg.hop_step / math.hypot(r, 2 * b)
+        for target in spiral_points(self.hole_xy, cfg.spiral_pitch, cfg.hop_step,
+                                    cfg.search_radius, turn=self.retries * GOLDEN_ANGLE):
             z = self._touch_down(target - low)
             if self.z_plane - z > cfg.drop_threshold:
                 return
@@ -310,7 +297,8 @@ class ContactPhases:
         opposite rim at the top edge lies ``D sin(tilt)`` (3.1 mm for the nominal 30 mm peg at
         6 deg) below the plane contact. Half of it: a face across the rim 3 mm beside the
         hole's axis rests 1.3 mm low, a face over the hole 2.2-2.7 mm."""
-        return THREE_POINT_FRACTION * self.peg.diameter * math.sin(math.radians(self.cfg.search_tilt_deg))
+        tilt = math.radians(self.cfg.search_tilt_deg)
+        return THREE_POINT_FRACTION * self.peg.diameter * math.sin(tilt)
 
     def align(self) -> None:
         """Wiggle alignment (Fig. 3c): each adjustment turns the peg back towards upright about

@@ -1,0 +1,82 @@
+"""The assembly module: the spiral's geometry (maths) and one whole assembly on the physics.
+
+The physics test runs one centre-grasp episode (scene 0 of ``diagnose_assembly.py``'s
+``--seed 7``, which assembles without a new search) and watches the peg's axis in the tool frame
+during the search: touch-downs do not rub, so the search tilt holds in the pads.
+"""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+import pytest
+
+from vgs.assembly.episode import EpisodeRunner, offset_policy
+from vgs.assembly.spiral import GOLDEN_ANGLE, spiral_points
+from vgs.config import profile
+
+
+def take(points, n: int) -> np.ndarray:
+    return np.array([next(points) for _ in range(n)])
+
+
+def test_the_spiral_starts_at_the_centre_and_steps_about_step_apart() -> None:
+    center = np.array([0.42, 0.22])
+    pts = take(spiral_points(center, pitch=0.006, step=0.006, radius=0.02), 40)
+    assert np.allclose(pts[0], center)
+    r = np.linalg.norm(pts - center, axis=1)
+    assert r.max() <= 0.02 + 1e-12
+    # r = b theta: the radius grows monotonically until the spiral starts again.
+    first_turn = r[: int(np.argmax(r)) + 1]
+    assert np.all(np.diff(first_turn) > 0)
+    gaps = np.linalg.norm(np.diff(pts[: len(first_turn)], axis=0), axis=1)
+    # Half a turn from the centre to the second point (r = pitch / 2), then about a step apart.
+    assert gaps[0] == pytest.approx(0.006 / 2, rel=1e-9)
+    assert np.all(gaps[2:] > 0.5 * 0.006) and np.all(gaps < 1.2 * 0.006)
+
+
+def test_a_repeated_spiral_starts_at_the_centre_turned_by_the_golden_angle() -> None:
+    center = np.zeros(2)
+    points = spiral_points(center, pitch=0.006, step=0.006, radius=0.01)
+    pts = take(points, 60)
+    restarts = [k for k in range(1, len(pts)) if np.allclose(pts[k], center)]
+    assert restarts, "the spiral never came back to its centre"
+    k = restarts[0]
+    angle_first = math.atan2(pts[1, 1], pts[1, 0])
+    angle_again = math.atan2(pts[k + 1, 1], pts[k + 1, 0])
+    turn = (angle_again - angle_first) % (2 * math.pi)
+    assert turn == pytest.approx(GOLDEN_ANGLE % (2 * math.pi), abs=1e-9)
+
+
+def test_spiral_rejects_a_degenerate_spiral() -> None:
+    with pytest.raises(ValueError):
+        next(spiral_points(np.zeros(2), pitch=0.0, step=0.006, radius=0.02))
+
+
+@pytest.mark.slow
+def test_a_centre_grasp_assembles_and_the_search_keeps_the_tilt() -> None:
+    runner = EpisodeRunner(profile("paper"))
+    seed = int(np.random.SeedSequence([7, 0]).generate_state(1)[0])
+    record, robot, _ = runner.run(seed, offset_policy(0.0), trace=True)
+    assert record.success, record.failure_reason
+    assert record.retries == 0
+    assert 10.0 < record.assembly_time < 60.0
+    # The recorded states replayed through MuJoCo's kinematics (ground truth, test only): the
+    # peg's axis in the tool frame over the search.
+    cell, trace = robot.cell, robot.trace
+    data = mujoco.MjData(cell.model)
+    turns: list[float] = []
+    axis0 = None
+    for phase, qpos in zip(trace.phase, trace.qpos, strict=True):
+        if phase != "search":
+            continue
+        data.qpos[:] = qpos
+        mujoco.mj_kinematics(cell.model, data)
+        R_world_tcp = data.site_xmat[cell.ids.tcp_site].reshape(3, 3)
+        axis = R_world_tcp.T @ data.xmat[cell.ids.peg_body].reshape(3, 3)[:, 2]
+        axis0 = axis if axis0 is None else axis0
+        turns.append(math.degrees(math.acos(float(np.clip(np.dot(axis, axis0), -1.0, 1.0)))))
+    assert turns, "no search ticks recorded"
+    assert max(turns) < 1.0  # deg: nothing rubs, so the peg keeps its tilt in the pads
