@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from vgs.columns import as_bool, normalize_row
+from vgs.experiments.stats import population_std
 
 
 def _rows(folder: Path) -> list[dict[str, str]]:
@@ -40,6 +41,8 @@ def _true(value: object) -> bool:
 
 
 def per_offset(folder: Path) -> str:
+    """The per-offset table: the sweep's own statistics (``summary.json``, made by
+    :func:`vgs.experiments.sweepstats.summarize`) beside the analysis-only columns of its rows."""
     rows = _rows(folder)
     by_offset: dict[float, list[dict[str, str]]] = collections.defaultdict(list)
     for r in rows:
@@ -47,17 +50,13 @@ def per_offset(folder: Path) -> str:
     out = ["| offset [mm] | assembled | mean time [s] | std [s] | alignment [s] | re-search "
            "| peg turn in pads, median / max [deg] | peak grasp moment, median [N m] |",
            "|---|---|---|---|---|---|---|---|"]
-    for offset in sorted(by_offset):
-        group = by_offset[offset]
-        ok = [r for r in group if _true(r["assembly_success"])]
-        t = np.array([float(r["assembly_time_s"]) for r in ok])
-        align = np.array([float(r["time_align_s"]) for r in ok])
-        retry = np.mean([int(float(r["retries"])) > 0 for r in group])
+    for stat in json.loads((folder / "summary.json").read_text())["offsets"]:
+        group = by_offset[float(stat["offset_mm"])]
         turn = np.array([float(r["peg_turn_deg"]) for r in group])
         peak = np.array([float(r["peak_grasp_moment_nm"]) for r in group])
-        # Population standard deviation: the sweep summary's convention (vgs.experiments.stats).
-        out.append(f"| {offset:+.1f} | {len(ok)}/{len(group)} | {t.mean():.1f} | "
-                   f"{t.std():.1f} | {align.mean():.1f} | {100 * retry:.0f} % | "
+        out.append(f"| {stat['offset_mm']:+.1f} | {stat['successes']}/{stat['n']} | "
+                   f"{stat['time_mean_s']:.1f} | {stat['time_std_s']:.1f} | "
+                   f"{stat['time_align_mean_s']:.1f} | {100 * stat['retry_rate']:.0f} % | "
                    f"{np.median(turn):.1f} / {turn.max():.1f} | {np.median(peak):.2f} |")
     ok = [r for r in rows if _true(r["assembly_success"])]
     t = np.array([float(r["assembly_time_s"]) for r in ok])
@@ -67,9 +66,11 @@ def per_offset(folder: Path) -> str:
     fail_text = ", ".join(f"{n} `{k}`" for k, n in fails.most_common()) or "none"
     out.append("")
     share = 100 * len(ok) / len(rows)
+    # The sweep summary's standard deviation convention (vgs.experiments.stats).
+    cv = population_std(t) / t.mean()
     out.append(f"All offsets: {len(ok)}/{len(rows)} assembled ({share:.1f} %); "
                f"failures: {fail_text}; re-search in {100 * retry:.0f} % of episodes; CV "
-               f"(std / mean) of successful times {t.std() / t.mean():.2f}; "
+               f"(std / mean) of successful times {cv:.2f}; "
                f"`not_inserted`: {fails.get('not_inserted', 0)}")
     return "\n".join(out)
 

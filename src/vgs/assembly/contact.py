@@ -71,6 +71,9 @@ HOP_HEIGHT = 0.001  # lift of the lowest rim point above the plane between two h
 HOP_PRESS_TIME = 0.15  # press at each hop before the height is read [s]
 
 
+HOP_LIFT_SPEED = 0.02  # speed of the lift before each free-air move [m/s]
+
+
 HOP_SPEED = 0.01  # free-air speed between touch-downs [m/s]
 
 
@@ -200,7 +203,7 @@ class ContactPhases:
         p[2] = max(robot.arm.tcp_height(), p[2], self.z_plane) + HOP_HEIGHT
         # Back to the search attitude: what the compliance gave way to at the last
         # touch-down must not accumulate.
-        robot.move_to(p, self.R_search, speed=0.02, settle=0.0)
+        robot.move_to(p, self.R_search, speed=HOP_LIFT_SPEED, settle=0.0)
         self._watch()
         p[:2] = tcp_xy
         robot.move_to(p, self.R_search, speed=HOP_SPEED, settle=HOP_SETTLE)
@@ -283,9 +286,8 @@ class ContactPhases:
                               robot.arm.R_ref, speed=cfg.slide_speed, settle=0.0)
                 return False
             if n % window == 0:
-                now = robot.arm.tcp_pose()[0][:2]
-                moving = np.linalg.norm(now - last) > 0.25 * cfg.slide_speed * THREE_POINT_TIME
-                last = now
+                moving = np.linalg.norm(xy - last) > 0.25 * cfg.slide_speed * THREE_POINT_TIME
+                last = xy
                 if not moving:
                     self.z_three = robot.arm.tcp_height()
                     return self.z_three < self.z_plane - self._three_point_depth()

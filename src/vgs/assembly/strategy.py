@@ -269,11 +269,11 @@ class AssemblyModule(ContactPhases):
         p_tilt = tip + Rt @ (p - tip)
         # Plane contact where the lowest rim point is certainly on the surface: further from
         # the nominal centre than the hole's radius plus its largest displacement (its radius).
-        lead = self._lowest_rim_offset(R_tilt)[:2]
-        lead = lead / max(float(np.linalg.norm(lead)), 1e-9)
+        rim = self._lowest_rim_offset(R_tilt)
+        lead = rim[:2] / max(float(np.linalg.norm(rim[:2])), 1e-9)
         target_xy = self.hole_xy + (2.0 * self.hole_radius + PLANE_CONTACT_MARGIN) * lead
         # Place the lowest rim point above the target at the start height.
-        low = tip + self._lowest_rim_offset(R_tilt)
+        low = tip + rim
         # Down to where the longest peg the product data allows, held at its end, would be
         # approach_height above the surface.
         longest = self.peg.length * (1.0 + LENGTH_TOLERANCE) - PAD_HALF[0]
