@@ -155,8 +155,8 @@ class ContactPhases:
         """
         if k_rot is None:
             k_rot = self.moment_limit / ROT_COMPLIANCE_ANGLE
-        d_lat = CONTACT_DAMPING if lateral_damping is None else lateral_damping
-        d_z = self.robot.cfg.force_damping if z_damping is None else z_damping
+        d_lat = max(CONTACT_DAMPING, lateral_damping or 0.0)
+        d_z = max(self.robot.cfg.force_damping, z_damping or 0.0)
         self.robot.arm.admittance.set_stiffness(
             np.array([lateral, lateral, 0.0, k_rot, k_rot, k_rot]),
             damping=np.array([d_lat, d_lat, d_z, ROT_DAMPING, ROT_DAMPING, ROT_DAMPING]))
@@ -309,10 +309,14 @@ class ContactPhases:
         robot, cfg = self.robot, self.cfg
         adm = robot.arm.admittance
         amp = math.radians(cfg.wiggle_amplitude_deg)
-        # Lateral force control without bias: the hole guides the peg; press down only.
+        # Lateral force control without bias: the hole guides the peg; press down only. Inside
+        # the hole the peg touches both walls: a lateral contact far stiffer than the rim on
+        # the face, and at CONTACT_DAMPING the discrete loop chattered between the walls
+        # (+-8 N at 14 Hz, wedging a peg tilted 4-5 deg 12 mm deep). The alignment damps its
+        # lateral axes like the force-controlled z axis (controller.force_damping).
         robot.arm.absorb_offset()
         adm.wrench_des[:] = [0.0, 0.0, -cfg.press_force, 0.0, 0.0, 0.0]
-        self._comply(0.0)
+        self._comply(0.0, lateral_damping=robot.cfg.force_damping)
         n_wiggle = max(2, int(round(cfg.wiggle_period / robot.dt)))
         start_adjustments = self.adjustments
         while True:

@@ -234,16 +234,6 @@ class AssemblyModule(ContactPhases):
         self._check_grasp()
         self._check_timeout("transport")
 
-    # -- the grasp watch ------------------------------------------------------------------
-
-
-
-
-
-
-
-
-
     def approach(self) -> None:
         robot, cfg, est = self.robot, self.cfg, self.estimate
         robot.arm.set_compliant(False)
@@ -294,13 +284,6 @@ class AssemblyModule(ContactPhases):
             self._check_timeout("approach")
         adm.wrench_des[2] = -cfg.press_force
         self.z_contact = robot.arm.tcp_pose()[0][2]
-
-
-
-
-
-
-
 
     def release(self) -> None:
         robot = self.robot

@@ -80,7 +80,8 @@ class AssemblyConfig:
             two-point contact [m]; touch-downs do not rub, so their heights differ by
             hundredths of a millimetre on the plane.
         slide_speed: Free sliding speed of the slide under its bias [m/s] (the lateral
-            damping is the bias over this speed); a quarter of it counts as still.
+            damping is the bias over this speed, at least the contact loop's 300 N s/m:
+            2 N / 6.5 mm/s = 308 N s/m); a quarter of it counts as still.
         three_point_force: Lateral bias of the slide [N]; the TCP at rest (the measured lateral
             force then balances it) and fallen into the hole: three-point contact.
         slide_press_force: Downward force during the slide [N]: light, so that friction at
@@ -112,7 +113,7 @@ class AssemblyConfig:
     spiral_pitch: float = 0.006
     search_radius: float = 0.02
     drop_threshold: float = 0.0005
-    slide_speed: float = 0.01
+    slide_speed: float = 0.0065
     three_point_force: float = 2.0
     slide_press_force: float = 2.0
     search_stiffness: float = 2000.0
