@@ -20,7 +20,6 @@ docs/cell.md, "The grasp".
 from __future__ import annotations
 
 import argparse
-import ast
 import math
 
 import numpy as np
@@ -28,7 +27,8 @@ import numpy as np
 from vgs.assembly.episode import EpisodeRunner, offset_policy
 from vgs.assembly.grasp import grasp
 from vgs.assembly.strategy import AssemblyModule
-from vgs.config import override, profile
+from vgs.cli.options import apply_override, parse_value
+from vgs.config import profile
 from vgs.control.robot import Robot
 from vgs.sim.rg2 import grasp_moment_capacity
 
@@ -45,13 +45,9 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
 
     cfg = profile("paper")
-    for item in args.set:
+    for item in args.set:  # as the vgs commands read --set
         key, _, text = item.partition("=")
-        try:
-            value: object = ast.literal_eval(text)
-        except (ValueError, SyntaxError):
-            value = text
-        cfg = override(cfg, key, value)
+        cfg = apply_override(cfg, key, parse_value(text))
     runner = EpisodeRunner(cfg)
     cell, cam = runner.cell(cfg.cell.peg)
     cell.reset(np.random.default_rng(args.seed))
