@@ -10,10 +10,11 @@ turn in the pads (about the pinch axis, from the start of the load) every ``--ev
     python benchmarks/probe_grasp_creep.py --where contact --fraction 0.33
     python benchmarks/probe_grasp_creep.py --where air --set cell.sim.noslip_iterations=10
 
-What it showed on 2026-12-02 (seed 5, centre grasp, a third of the capacity, 5 s): with one
-no-slip iteration (the default) the peg held in free air does not turn (0.000 deg) and with its
-rim on the table creeps 0.83 deg (0.57 deg in the first second, then about 0.06 deg/s); with 10
-iterations the step load turns it 34 deg in free air and 14 deg in contact within 0.1 s. See
+What it showed on 2026-12-02 (seed 5, centre grasp, a third of the capacity, 5 s): with the pads'
+stick state (:mod:`vgs.sim.stiction`, the default) 0.004 deg in free air and 0.117 deg with the
+rim on the table (all of it in the first second); without it (``--set
+cell.gripper.stiction=False``) 0.000 deg in free air and 1.1 deg on the table, still creeping;
+with 10 no-slip iterations and no stick state the step turns the peg 34 deg in free air. See
 docs/cell.md, "The grasp".
 """
 

@@ -80,7 +80,8 @@ def center_policy() -> Policy:
 class GraspWatch:
     """Ground truth of the grasp during the assembly, for the record only (never seen by the
     controller): how far the peg turns in the pads, and the largest moment about the pinch
-    axis (tool y) that the pads' contact forces exert on the peg, about the TCP.
+    axis (tool y) that the fingers' contact forces and, while the pads stick, their weld
+    (:mod:`vgs.sim.stiction`) exert on the peg, about the TCP.
 
     Attached to :attr:`vgs.control.robot.Robot.observers` after the grasp; it samples every
     ``every``-th control tick (25 Hz by default, so a peak is the largest sampled moment) and
@@ -143,6 +144,9 @@ class GraspWatch:
             fx, fy, fz = f.tolist()
             torque = np.array([ry * fz - rz * fy, rz * fx - rx * fz, rx * fy - ry * fx]) + tau
             moment += sign * float(np.dot(torque, pinch))
+        if self.cell.stiction is not None and self.cell.stiction.stuck:
+            # What the pads' stick state carries beyond their contacts' friction.
+            moment += float(self.cell.stiction.gripper_wrench(pads=False)[3][1])
         self.peak_moment = max(self.peak_moment, abs(moment))
 
 

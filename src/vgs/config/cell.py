@@ -106,6 +106,9 @@ class GripperConfig:
         pad_rolling_friction: Rolling friction of the pads [m] (0: none; > 0 gives the pads
             ``condim=6``).
         closing_speed: Finger closing speed [m/s] (RG2: about 0.11 m/s full stroke in 1 s).
+        stiction: Give the pads a stick state (:mod:`vgs.sim.stiction`): the grasp holds
+            without creeping until its load reaches the pads' friction limit. False leaves
+            MuJoCo's velocity-regularised friction alone (the cell before 2026-12-02).
     """
 
     force: float = 40.0
@@ -114,6 +117,7 @@ class GripperConfig:
     pad_torsional_friction: float = 0.001
     pad_rolling_friction: float = 0.0
     closing_speed: float = 0.11
+    stiction: bool = True
 
     def __post_init__(self) -> None:
         if not (3.0 <= self.force <= 40.0):

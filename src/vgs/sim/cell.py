@@ -15,7 +15,7 @@ import numpy as np
 
 from vgs.config import CellConfig
 from vgs.errors import SimulationError
-from vgs.sim import objects, rg2, ur5
+from vgs.sim import objects, rg2, stiction, ur5
 
 # A joint configuration with the TCP at (0.42, -0.05, 0.25), tool z down, tool x along world x
 # (elbow up, wrist down; solved with the TCP Jacobian, checked in tests/test_kinematics.py).
@@ -57,6 +57,8 @@ def build_spec(cfg: CellConfig) -> mujoco.MjSpec:
     rg2.add_rg2(flange, spec, cfg.gripper, solref, solimp)
     objects.add_peg(world, cfg.peg, solref, solimp)
     objects.add_hole(spec, world, cfg.hole, solref, solimp)
+    if cfg.gripper.stiction:
+        stiction.add_pad_weld(spec, solref, solimp)
     for name in ur5.JOINT_NAMES:
         act = spec.add_actuator(name=name, target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
         act.set_to_position(kp=1.0, kv=0.0)  # gains are set from the controller config
@@ -153,6 +155,8 @@ class Cell:
         self.hole_xy = np.array(cfg.hole.nominal_xy, dtype=float)
         self._badqacc = self.data.warning[mujoco.mjtWarning.mjWARN_BADQACC]
         self._peg_qacc = self.data.qacc[self.ids.peg_dof:self.ids.peg_dof + 1]
+        self.stiction = (stiction.PadStiction(m, self.data, cfg.gripper, cfg.peg.radius)
+                         if cfg.gripper.stiction else None)
 
     # -- reset ------------------------------------------------------------------------------
 
@@ -199,6 +203,8 @@ class Cell:
     def step(self, nstep: int) -> None:
         """Advance the physics ``nstep`` steps; raise :class:`SimulationError` on divergence."""
         mujoco.mj_step(self.model, self.data, nstep)
+        if self.stiction is not None:
+            self.stiction.update()
         if self._badqacc.number > 0 or not math.isfinite(self._peg_qacc[0]):
             raise SimulationError("physics diverged (bad qacc)")
 

@@ -1,0 +1,217 @@
+"""Static friction of the RG2's pads: the grasp sticks until its load reaches the pads' limit.
+
+MuJoCo's friction is velocity-regularised: a contact that transmits a tangential load slides a
+little, all the time. MuJoCo's no-slip post-solver (``sim.noslip_iterations``) pins the pads
+while they are the peg's only contacts, but once the peg also presses on the table or a wall of
+the hole the peg creeps round in the pads under a third of the grasp's capacity (0.83 deg in
+5 s, ``python benchmarks/probe_grasp_creep.py``), and more no-slip iterations make a step load
+jump instead (docs/cell.md, "The grasp"). A rubber pad does not creep: it sticks until the load
+reaches the Coulomb limit and then slides.
+
+:class:`PadStiction` gives the pads that stick state, as a latch checked once per control tick:
+
+*stick*
+    A weld between the gripper housing (body ``rg2``) and the peg, at their relative pose of
+    the moment it engaged, carries the load the pads' contacts do not. The contacts keep
+    pressing with the grip force and keep their friction; the weld only removes the creep.
+*slip*
+    The wrench the gripper exerts on the peg (the weld's and the pad contacts'), taken at the
+    TCP in the tool frame, is compared with the pads' friction limit surface, an ellipsoid
+    through the four friction-limited components (Howe and Cutkosky's ellipsoidal
+    approximation of a limit surface)::
+
+        (f_x / (mu N))^2 + (f_z / (mu N))^2 + (m_x / (mu N r))^2 + (m_y / M_y)^2 <= 1
+
+    with N the pads' summed normal force read from their contacts, tool x along the pads'
+    long side (the peg's axis), tool y the pinch axis, tool z the approach axis; the pads
+    touch the peg at r = its radius from the axis; ``M_y = grasp_moment_capacity * N / (2 F)``
+    is the line contacts' torsion (:func:`vgs.sim.rg2.grasp_moment_capacity`). ``f_y`` and
+    ``m_z`` are carried by the pads' normal pressure, not by friction. Beyond the surface, or
+    with the pads pressing less than ``RELEASE_FRACTION`` of the grip force on average (the
+    gripper opening), the weld lets go and the pads slide on MuJoCo's own (kinetic) friction.
+*engage*
+    Both pads press with at least ``ENGAGE_FRACTION`` of the grip force, the peg moves
+    relative to the pads slower than ``STICK_SPEED`` and ``STICK_RATE``, and the contacts'
+    own load lies inside ``REENGAGE_LOAD`` of the surface (a peg sliding at the limit does
+    not re-stick until its load has dropped).
+
+Nothing here reads the controller; the latch is part of the cell's physics, like the contacts.
+Its state is ground truth (records and tests only).
+"""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+from vgs.config import GripperConfig
+from vgs.sim.rg2 import grasp_moment_capacity
+
+WELD_NAME = "pad_stiction"
+
+ENGAGE_FRACTION = 0.5  # each pad's normal force, of the grip force, for the pads to stick
+RELEASE_FRACTION = 0.25  # pads' mean normal force below this, of the grip: the grasp opens
+STICK_SPEED = 0.002  # relative speed at the TCP under which the pads stick [m/s]
+STICK_RATE = math.radians(2.0)  # relative angular rate under which the pads stick [rad/s]
+REENGAGE_LOAD = 0.8  # the contacts' load, of the limit surface, under which they re-stick
+
+
+def add_pad_weld(spec: mujoco.MjSpec, solref: list[float], solimp: list[float]) -> None:
+    """Add the (inactive) weld between the gripper housing and the peg that holds the stick
+    state; :class:`PadStiction` sets its relative pose and switches it."""
+    eq = spec.add_equality(type=mujoco.mjtEq.mjEQ_WELD, name=WELD_NAME, name1="rg2",
+                           name2="peg", objtype=mujoco.mjtObj.mjOBJ_BODY)
+    eq.active = False
+    eq.solref = solref
+    eq.solimp = solimp
+
+
+class PadStiction:
+    """The pads' stick/slip latch on a compiled cell (see the module docstring).
+
+    Args:
+        model: The compiled cell.
+        data: Its state.
+        cfg: The gripper (grip force, pad friction, the capacity's geometry).
+        peg_radius: Lever of the pads' tangential forces about the peg's axis [m].
+    """
+
+    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, cfg: GripperConfig,
+                 peg_radius: float) -> None:
+        self.model, self.data, self.cfg = model, data, cfg
+        self.eq = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_EQUALITY, WELD_NAME)
+        self.housing = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "rg2")
+        self.peg = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "peg")
+        self.tcp = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, "tcp")
+        self.pads = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"pad_{s}")
+                              for s in ("left", "right")])
+        self.peg_geom = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "peg")
+        dof = int(model.jnt_dofadr[model.body_jntadr[self.peg]])
+        self.peg_dofs = slice(dof, dof + 6)
+        self.peg_radius = peg_radius
+        self.capacity_per_newton = grasp_moment_capacity(cfg) / (2.0 * cfg.force)
+        self._qfrc = np.zeros(model.nv)
+        self._mask = np.zeros(0)
+        self._vel = np.zeros(6)
+        self._vel_housing = np.zeros(6)
+        self._c = np.zeros(6)
+        # Ground truth for records and tests: how often the pads broke loose, the last load.
+        self.breaks = 0
+        self.last_load = 0.0
+
+    @property
+    def stuck(self) -> bool:
+        """Whether the pads stick (the weld is active)."""
+        return bool(self.data.eq_active[self.eq])
+
+    def update(self) -> None:
+        """Check the latch after the physics steps of one control tick."""
+        d, grip = self.data, self.cfg.force
+        stuck = self.stuck
+        n_left, n_right, f, mom = self.gripper_wrench()
+        weakest = min(n_left, n_right)
+        if not stuck and weakest < ENGAGE_FRACTION * grip:
+            self.last_load = 0.0
+            return
+        load = self._limit_value(f, mom, n_left + n_right)
+        self.last_load = load
+        if stuck:
+            # The pinch, from both pads together: while stuck the weld also carries the pinch,
+            # and one pad's contact can drop out of MuJoCo's collision for a step.
+            if load > 1.0 or n_left + n_right < 2.0 * RELEASE_FRACTION * grip:
+                d.eq_active[self.eq] = 0
+                self.breaks += 1
+        elif load < REENGAGE_LOAD and self._relative_motion_small():
+            self._engage()
+
+    # -- the latch's pieces -----------------------------------------------------------------
+
+    def _engage(self) -> None:
+        """Weld the peg to the housing at their present relative pose.
+
+        MuJoCo's weld holds ``p_1 + R_1 relpos = p_2 + R_2 anchor`` and
+        ``q_1 relquat = q_2``: with the anchor at the peg's origin, ``relpos`` is the peg's
+        position and ``relquat`` its orientation in the housing's frame.
+        """
+        m, d = self.model, self.data
+        p1, R1 = d.xpos[self.housing], d.xmat[self.housing].reshape(3, 3)
+        p2, R2 = d.xpos[self.peg], d.xmat[self.peg].reshape(3, 3)
+        eq = m.eq_data[self.eq]
+        eq[0:3] = 0.0
+        eq[3:6] = R1.T @ (p2 - p1)
+        q = np.zeros(4)
+        mujoco.mju_mat2Quat(q, (R1.T @ R2).ravel())
+        eq[6:10] = q
+        eq[10] = 1.0  # torquescale
+        d.eq_active[self.eq] = 1
+
+    def _relative_motion_small(self) -> bool:
+        """Whether the peg moves relative to the housing slower than the stick thresholds."""
+        m, d = self.model, self.data
+        mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, self.peg, self._vel, 0)
+        mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, self.housing,
+                                 self._vel_housing, 0)
+        hsg = self._vel_housing
+        w_rel = self._vel[:3] - hsg[:3]
+        p_tcp = d.site_xpos[self.tcp]
+        v_peg = self._vel[3:] + np.cross(self._vel[:3], p_tcp - d.xpos[self.peg])
+        v_hsg = hsg[3:] + np.cross(hsg[:3], p_tcp - d.xpos[self.housing])
+        return (float(np.linalg.norm(v_peg - v_hsg)) < STICK_SPEED
+                and float(np.linalg.norm(w_rel)) < STICK_RATE)
+
+    def gripper_wrench(self, pads: bool = True) -> tuple[float, float, np.ndarray, np.ndarray]:
+        """The pads' normal forces and the wrench the gripper (the pads' contacts, unless
+        ``pads`` is False, and the weld while stuck) exerts on the peg:
+        ``(N_left, N_right, f, m)``, the force and the moment about the TCP in the tool frame
+        [N, N m].
+
+        The constraint forces of those rows are mapped onto the peg's free joint with the
+        constraint Jacobian (``J^T f``): the world-frame force at the peg's origin and the
+        torque in the peg's frame. With elliptic cones a contact's first row is its normal
+        force.
+        """
+        m, d = self.model, self.data
+        mask = self._mask
+        if mask.shape[0] != d.nefc:
+            mask = self._mask = np.zeros(d.nefc)
+        else:
+            mask[:] = 0.0
+        n_left = n_right = 0.0
+        if d.ncon:
+            con = d.contact
+            geom, adr, dim = con.geom, con.efc_address, con.dim
+            peg_first = geom[:, 0] == self.peg_geom
+            other = np.where(peg_first, geom[:, 1], geom[:, 0])
+            left = other == self.pads[0]
+            right = other == self.pads[1]
+            on_pad = (peg_first | (geom[:, 1] == self.peg_geom)) & (left | right) & (adr >= 0)
+            for i in np.flatnonzero(on_pad):
+                a = int(adr[i])
+                if pads:
+                    mask[a:a + int(dim[i])] = 1.0
+                if left[i]:
+                    n_left += float(d.efc_force[a])
+                else:
+                    n_right += float(d.efc_force[a])
+        ne = d.ne  # equality rows come first
+        mask[:ne] = d.efc_id[:ne] == self.eq
+        mujoco.mj_mulJacTVec(m, d, self._qfrc, mask * d.efc_force[:d.nefc])
+        q = self._qfrc[self.peg_dofs]
+        f = q[:3]
+        tau = d.xmat[self.peg].reshape(3, 3) @ q[3:]
+        r = d.xpos[self.peg] - d.site_xpos[self.tcp]
+        mom = tau + np.array([r[1] * f[2] - r[2] * f[1], r[2] * f[0] - r[0] * f[2],
+                              r[0] * f[1] - r[1] * f[0]])
+        R = d.site_xmat[self.tcp].reshape(3, 3)
+        return n_left, n_right, R.T @ f, R.T @ mom
+
+    def _limit_value(self, f: np.ndarray, mom: np.ndarray, normal: float) -> float:
+        """The tool-frame wrench's place on the pads' ellipsoidal limit surface: 1 on it."""
+        if normal <= 0.0:
+            return math.inf
+        mu_n = self.cfg.pad_friction * normal
+        m_y = self.capacity_per_newton * normal
+        return math.sqrt((f[0] / mu_n) ** 2 + (f[2] / mu_n) ** 2
+                         + (mom[0] / (mu_n * self.peg_radius)) ** 2 + (mom[1] / m_y) ** 2)
