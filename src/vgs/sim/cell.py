@@ -155,7 +155,8 @@ class Cell:
         self.hole_xy = np.array(cfg.hole.nominal_xy, dtype=float)
         self._badqacc = self.data.warning[mujoco.mjtWarning.mjWARN_BADQACC]
         self._peg_qacc = self.data.qacc[self.ids.peg_dof:self.ids.peg_dof + 1]
-        self.stiction = (stiction.PadStiction(m, self.data, cfg.gripper, cfg.peg.radius)
+        self.stiction = (stiction.PadStiction(m, self.data, self.ids, cfg.gripper,
+                                              cfg.peg.radius)
                          if cfg.gripper.stiction else None)
 
     # -- reset ------------------------------------------------------------------------------

@@ -42,12 +42,16 @@ Its state is ground truth (records and tests only).
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
 
 from vgs.config import GripperConfig
 from vgs.sim.rg2 import grasp_moment_capacity
+
+if TYPE_CHECKING:
+    from vgs.sim.cell import CellIds
 
 WELD_NAME = "pad_stiction"
 
@@ -74,29 +78,25 @@ class PadStiction:
     Args:
         model: The compiled cell.
         data: Its state.
+        ids: The cell's named elements (peg, pads, TCP).
         cfg: The gripper (grip force, pad friction, the capacity's geometry).
         peg_radius: Lever of the pads' tangential forces about the peg's axis [m].
     """
 
-    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, cfg: GripperConfig,
-                 peg_radius: float) -> None:
+    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, ids: CellIds,
+                 cfg: GripperConfig, peg_radius: float) -> None:
         self.model, self.data, self.cfg = model, data, cfg
         self.eq = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_EQUALITY, WELD_NAME)
         self.housing = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "rg2")
-        self.peg = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "peg")
-        self.tcp = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, "tcp")
-        self.pads = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"pad_{s}")
-                              for s in ("left", "right")])
-        self.peg_geom = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "peg")
-        dof = int(model.jnt_dofadr[model.body_jntadr[self.peg]])
-        self.peg_dofs = slice(dof, dof + 6)
+        self.peg, self.tcp, self.peg_geom = ids.peg_body, ids.tcp_site, ids.peg_geom
+        self.pads = ids.pad_geoms
+        self.peg_dofs = slice(ids.peg_dof, ids.peg_dof + 6)
         self.peg_radius = peg_radius
         self.capacity_per_newton = grasp_moment_capacity(cfg) / (2.0 * cfg.force)
         self._qfrc = np.zeros(model.nv)
         self._mask = np.zeros(0)
         self._vel = np.zeros(6)
         self._vel_housing = np.zeros(6)
-        self._c = np.zeros(6)
         # Ground truth for records and tests: how often the pads broke loose, the last load.
         self.breaks = 0
         self.last_load = 0.0
@@ -110,11 +110,11 @@ class PadStiction:
         """Check the latch after the physics steps of one control tick."""
         d, grip = self.data, self.cfg.force
         stuck = self.stuck
-        n_left, n_right, f, mom = self.gripper_wrench()
-        weakest = min(n_left, n_right)
-        if not stuck and weakest < ENGAGE_FRACTION * grip:
-            self.last_load = 0.0
+        n_left, n_right = self._select_pad_rows(pads=True)
+        if not stuck and min(n_left, n_right) < ENGAGE_FRACTION * grip:
+            self.last_load = 0.0  # no pinch: nothing to stick (the grasp's idle ticks)
             return
+        f, mom = self._selected_wrench()
         load = self._limit_value(f, mom, n_left + n_right)
         self.last_load = load
         if stuck:
@@ -165,14 +165,15 @@ class PadStiction:
         """The pads' normal forces and the wrench the gripper (the pads' contacts, unless
         ``pads`` is False, and the weld while stuck) exerts on the peg:
         ``(N_left, N_right, f, m)``, the force and the moment about the TCP in the tool frame
-        [N, N m].
+        [N, N m]."""
+        n_left, n_right = self._select_pad_rows(pads)
+        return (n_left, n_right, *self._selected_wrench())
 
-        The constraint forces of those rows are mapped onto the peg's free joint with the
-        constraint Jacobian (``J^T f``): the world-frame force at the peg's origin and the
-        torque in the peg's frame. With elliptic cones a contact's first row is its normal
-        force.
-        """
-        m, d = self.model, self.data
+    def _select_pad_rows(self, pads: bool) -> tuple[float, float]:
+        """Mark the constraint rows of the gripper's wrench on the peg (the pad contacts'
+        unless ``pads`` is False, and the weld's) and return the pads' normal forces [N]
+        (with elliptic cones a contact's first row is its normal force)."""
+        d = self.data
         mask = self._mask
         if mask.shape[0] != d.nefc:
             mask = self._mask = np.zeros(d.nefc)
@@ -197,7 +198,14 @@ class PadStiction:
                     n_right += float(d.efc_force[a])
         ne = d.ne  # equality rows come first
         mask[:ne] = d.efc_id[:ne] == self.eq
-        mujoco.mj_mulJacTVec(m, d, self._qfrc, mask * d.efc_force[:d.nefc])
+        return n_left, n_right
+
+    def _selected_wrench(self) -> tuple[np.ndarray, np.ndarray]:
+        """Force and moment about the TCP, tool frame, of the rows :meth:`_select_pad_rows`
+        marked: their constraint forces mapped onto the peg's free joint (``J^T f``), the
+        world-frame force at the peg's origin and the torque in the peg's frame."""
+        m, d = self.model, self.data
+        mujoco.mj_mulJacTVec(m, d, self._qfrc, self._mask * d.efc_force[:d.nefc])
         q = self._qfrc[self.peg_dofs]
         f = q[:3]
         tau = d.xmat[self.peg].reshape(3, 3) @ q[3:]
@@ -205,7 +213,7 @@ class PadStiction:
         mom = tau + np.array([r[1] * f[2] - r[2] * f[1], r[2] * f[0] - r[0] * f[2],
                               r[0] * f[1] - r[1] * f[0]])
         R = d.site_xmat[self.tcp].reshape(3, 3)
-        return n_left, n_right, R.T @ f, R.T @ mom
+        return R.T @ f, R.T @ mom
 
     def _limit_value(self, f: np.ndarray, mom: np.ndarray, normal: float) -> float:
         """The tool-frame wrench's place on the pads' ellipsoidal limit surface: 1 on it."""
