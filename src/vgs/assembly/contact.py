@@ -8,6 +8,7 @@ constants and the exceptions of the strategy live here.
 from __future__ import annotations
 
 import math
+from collections import deque
 
 import numpy as np
 
@@ -81,6 +82,15 @@ HOP_SETTLE = 0.1  # still time before each touch-down [s]
 
 
 HOP_DESCENT_SPEED = 0.003  # speed of each touch-down [m/s]
+
+
+# Touch-downs whose median height is the plane's where the next one lands. Each touch-down
+# presses the rim point beside the pads' line, and at long levers the pads give a little: the
+# peg turned 0.8 deg over one search (-26.25 mm, sweep scene 37), lifting the rim point
+# 0.3 mm against the pads, more than half the drop threshold. A sunk touch-down lands at most
+# two in a row at the hole's edge before one lands deep enough; the median of five ignores
+# them, and one touch-down on something higher than the plane.
+PLANE_WINDOW = 5
 
 
 # Rotational admittance stiffness of a touch-down [N m/rad]: the 5 N press at the lowest rim
@@ -172,14 +182,18 @@ class ContactPhases:
         """Archimedes spiral of touch-downs: the lowest rim point is lifted, carried in free
         air to the next point of the spiral around the nominal hole and lowered until the
         contact force reaches ``contact_force``; pressed with ``press_force``, the TCP height
-        below the plane contact's (the approach) is the rim point's depth. Deeper than
+        below the plane's (the median height of the last ``PLANE_WINDOW`` touch-downs, the
+        approach's plane contact among them at first) is the rim point's depth. Deeper than
         ``drop_threshold``: two-point contact (Figure 2b). Nothing rubs, so no friction turns
         the peg in the pads."""
         robot, cfg = self.robot, self.cfg
-        # The approach ended in plane contact with the rim point on the surface: every depth
-        # of this search is measured from here (a new search measures again: the peg may
-        # have turned in the pads since).
+        # The approach ended in plane contact with the rim point on the surface: the first
+        # depth is measured from there. The peg's turn in the pads moves the rim point against
+        # the TCP by tenths of a millimetre over a search, so each depth is measured from the
+        # median height of the last PLANE_WINDOW touch-downs (a new search starts afresh: the
+        # peg may have turned since).
         self.z_plane = robot.arm.tcp_height()
+        heights: deque[float] = deque([self.z_plane], maxlen=PLANE_WINDOW)
         # Every new search starts at the centre again, its spiral turned by the golden angle:
         # the hole is likeliest near the nominal centre, and the points of the last spiral led
         # to a wrong contact state.
@@ -188,8 +202,10 @@ class ContactPhases:
         for target in spiral_points(self.hole_xy, cfg.spiral_pitch, cfg.hop_step,
                                     cfg.search_radius, turn=self.retries * GOLDEN_ANGLE):
             z = self._touch_down(target - low)
+            self.z_plane = float(np.median(heights))
             if self.z_plane - z > cfg.drop_threshold:
                 return
+            heights.append(z)
             self._check_timeout("search")
 
     def _touch_down(self, tcp_xy: np.ndarray) -> float:
