@@ -1,4 +1,5 @@
-"""The assembly module: the spiral's geometry (maths) and one whole assembly on the physics.
+"""The assembly module: the spiral's geometry and the search's depth rule (maths, no physics) and
+one whole assembly on the physics.
 
 The physics test runs one centre-grasp episode (scene 0 of ``diagnose_assembly.py``'s
 ``--seed 7``, which assembles without a new search) and watches the peg's axis in the tool frame
@@ -8,11 +9,13 @@ during the search: touch-downs do not rub, so the search tilt holds in the pads.
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import mujoco
 import numpy as np
 import pytest
 
+from vgs.assembly.contact import ContactPhases
 from vgs.assembly.episode import EpisodeRunner, offset_policy
 from vgs.assembly.spiral import GOLDEN_ANGLE, spiral_points
 from vgs.config import profile
@@ -80,3 +83,54 @@ def test_a_centre_grasp_assembles_and_the_search_keeps_the_tilt() -> None:
         turns.append(math.degrees(math.acos(float(np.clip(np.dot(axis, axis0), -1.0, 1.0)))))
     assert turns, "no search ticks recorded"
     assert max(turns) < 1.0  # deg: nothing rubs, so the peg keeps its tilt in the pads
+
+
+class _Arm:
+    def __init__(self) -> None:
+        self.R_ref = np.eye(3)
+
+    def tcp_height(self) -> float:
+        return 0.100  # the approach's plane contact [m]
+
+
+class _Search(ContactPhases):
+    """The search's decision rule on scripted touch-down heights (no physics): each call of
+    ``_touch_down`` returns the next height; ``landed`` counts them."""
+
+    def __init__(self, heights: list[float]) -> None:
+        self.robot = SimpleNamespace(arm=_Arm())
+        self.cfg = profile("paper").assembly
+        self.hole_xy = np.zeros(2)
+        self.low_rim_from_tcp = np.zeros(3)
+        self.retries = 0
+        self._heights = iter(heights)
+        self.landed = 0
+
+    def _touch_down(self, tcp_xy: np.ndarray) -> float:
+        self.landed += 1
+        return next(self._heights)
+
+    def _check_timeout(self, phase: str) -> None:
+        pass
+
+
+def test_a_touch_down_is_deep_against_its_neighbours_on_the_plane() -> None:
+    # The rim point rises 0.3 mm against the TCP over the search (the peg turns in the pads),
+    # then one touch-down sinks 0.4 mm below its neighbours: 0.1 mm below the approach's plane
+    # contact, but 0.7 mm below the plane where it lands.
+    rising = [0.100 + 0.00003 * k for k in range(1, 11)]
+    heights = [*rising, rising[-1] - 0.0007, 0.0]
+    search = _Search(heights)
+    search.search()
+    assert search.landed == 11
+    assert search.z_plane == pytest.approx(np.median(rising[-5:]))
+
+
+def test_one_touch_down_on_something_higher_does_not_make_the_plane() -> None:
+    # A touch-down 0.8 mm high (an edge, a burr) is outvoted by the median: the next touch-downs
+    # on the plane are not taken for a drop.
+    heights = [0.100, 0.100, 0.1008, 0.100, 0.100, 0.100, 0.0994]
+    search = _Search(heights)
+    search.search()
+    assert search.landed == 7  # only the last, 0.6 mm below the plane
+    assert search.z_plane == pytest.approx(0.100)

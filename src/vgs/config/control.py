@@ -71,14 +71,16 @@ class AssemblyConfig:
             drops into the hole first and produces two-point contact.
         spiral_pitch: Radial growth per turn of the Archimedes spiral of touch-downs [m].
         hop_step: Distance between two touch-downs along the spiral [m] (from the centre the
-            second lies half a turn on). The rim point sinks ``drop_threshold`` about 5 mm
-            inside the hole's edge at 6 deg, so 6 mm apart the touch-downs cannot step over
-            the hole.
+            second lies half a turn on). At 6 deg the rim point sinks ``drop_threshold`` only
+            within a strip about 10 mm wide along the lean, from 6 mm short of the hole's axis
+            to its far wall (137 mm^2, 18 % of the hole: ``benchmarks/touchdown_geometry.py``):
+            6 mm apart, a spiral can step over it, and a new search turns its spiral.
         search_radius: Largest spiral radius [m]; the spiral starts again from its centre
             beyond it (the hole lies within its own radius of the nominal position).
-        drop_threshold: Depth of a touch-down below the plane contact (TCP height) that declares
-            two-point contact [m]; touch-downs do not rub, so their heights differ by
-            hundredths of a millimetre on the plane.
+        drop_threshold: Depth of a touch-down below the plane (TCP height; the plane's is the
+            median of the last five touch-downs) that declares two-point contact [m];
+            touch-downs do not rub, so neighbouring heights on the plane differ by hundredths
+            of a millimetre.
         slide_speed: Free sliding speed of the slide under its bias [m/s] (the lateral
             damping is the bias over this speed, at least the contact loop's 300 N s/m:
             2 N / 6.5 mm/s = 308 N s/m); a quarter of it counts as still.
