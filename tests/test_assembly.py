@@ -115,22 +115,31 @@ class _Search(ContactPhases):
 
 
 def test_a_touch_down_is_deep_against_its_neighbours_on_the_plane() -> None:
-    # The rim point rises 0.3 mm against the TCP over the search (the peg turns in the pads),
-    # then one touch-down sinks 0.4 mm below its neighbours: 0.1 mm below the approach's plane
-    # contact, but 0.7 mm below the plane where it lands.
+    # The plane's TCP height rises 0.3 mm over the search (the peg turns in the pads), then one
+    # touch-down sinks 0.4 mm below its neighbours: 0.1 mm below the approach's plane contact,
+    # but 0.7 mm below the plane where it lands.
     rising = [0.100 + 0.00003 * k for k in range(1, 11)]
-    heights = [*rising, rising[-1] - 0.0007, 0.0]
-    search = _Search(heights)
+    search = _Search([*rising, rising[-1] - 0.0007, 0.0])
     search.search()
     assert search.landed == 11
-    assert search.z_plane == pytest.approx(np.median(rising[-5:]))
+    assert search.z_plane == pytest.approx(rising[-1])
+
+
+def test_touch_downs_sunk_in_a_row_do_not_lower_the_plane() -> None:
+    # The spiral's first points lie in the hole and sink 0.2-0.4 mm each (the face resting on
+    # the edge), more than the window holds: the plane stays the approach's contact, and the
+    # touch-down 0.6 mm below it is two-point contact.
+    sunk = [0.1000 - d for d in (0.0003, 0.0002, 0.0004, 0.0003, 0.0002, 0.0004, 0.0003)]
+    search = _Search([*sunk, 0.0994, 0.0])
+    search.search()
+    assert search.landed == len(sunk) + 1
+    assert search.z_plane == pytest.approx(0.100)
 
 
 def test_one_touch_down_on_something_higher_does_not_make_the_plane() -> None:
-    # A touch-down 0.8 mm high (an edge, a burr) is outvoted by the median: the next touch-downs
-    # on the plane are not taken for a drop.
-    heights = [0.100, 0.100, 0.1008, 0.100, 0.100, 0.100, 0.0994]
-    search = _Search(heights)
+    # A touch-down 0.8 mm high (an edge, a burr) is not taken for the plane: the touch-downs on
+    # the plane after it are not taken for a drop.
+    search = _Search([0.100, 0.100, 0.1008, 0.100, 0.100, 0.100, 0.0994])
     search.search()
     assert search.landed == 7  # only the last, 0.6 mm below the plane
     assert search.z_plane == pytest.approx(0.100)

@@ -84,12 +84,16 @@ HOP_SETTLE = 0.1  # still time before each touch-down [s]
 HOP_DESCENT_SPEED = 0.003  # speed of each touch-down [m/s]
 
 
-# Touch-downs whose median height is the plane's where the next one lands. Each touch-down
-# presses the rim point beside the pads' line, and at long levers the pads give a little: the
-# peg turned 0.8 deg over one search (-26.25 mm, sweep scene 37), lifting the rim point
-# 0.3 mm against the pads, more than half the drop threshold. A sunk touch-down lands at most
-# two in a row at the hole's edge before one lands deep enough; the median of five ignores
-# them, and one touch-down on something higher than the plane.
+# Touch-downs that can raise the plane's height above the approach's plane contact. Each
+# touch-down presses the rim point beside the pads' line, and at long levers the pads give a
+# little: the peg turned 0.8 deg further into its tilt over one search (-26.25 mm, sweep scene
+# 37), the rim point went 0.3 mm lower against the TCP, and touch-downs on the plane read
+# 0.3 mm high, more than half the drop threshold. The plane is the highest of the approach's
+# contact and the last five touch-downs: a touch-down can sink into the hole, several in a
+# row near the spiral's centre, but not rise above the plane, and one that lands more than
+# half the drop threshold above it has touched something else and is not taken for the
+# plane. Never below the approach's contact, the rule finds every sink the plane contact
+# alone found.
 PLANE_WINDOW = 5
 
 
@@ -182,18 +186,18 @@ class ContactPhases:
         """Archimedes spiral of touch-downs: the lowest rim point is lifted, carried in free
         air to the next point of the spiral around the nominal hole and lowered until the
         contact force reaches ``contact_force``; pressed with ``press_force``, the TCP height
-        below the plane's (the median height of the last ``PLANE_WINDOW`` touch-downs, the
-        approach's plane contact among them at first) is the rim point's depth. Deeper than
+        below the plane's (the approach's plane contact, or the highest of the last
+        ``PLANE_WINDOW`` touch-downs where they landed higher) is the rim point's depth. Deeper than
         ``drop_threshold``: two-point contact (Figure 2b). Nothing rubs, so no friction turns
         the peg in the pads."""
         robot, cfg = self.robot, self.cfg
-        # The approach ended in plane contact with the rim point on the surface: the first
-        # depth is measured from there. The peg's turn in the pads moves the rim point against
-        # the TCP by tenths of a millimetre over a search, so each depth is measured from the
-        # median height of the last PLANE_WINDOW touch-downs (a new search starts afresh: the
-        # peg may have turned since).
-        self.z_plane = robot.arm.tcp_height()
-        heights: deque[float] = deque([self.z_plane], maxlen=PLANE_WINDOW)
+        # The approach ended in plane contact with the rim point on the surface: depths are
+        # measured from there, or from the highest of the last PLANE_WINDOW touch-downs where
+        # the peg's turn in the pads has raised the plane's TCP height since (a new search
+        # starts afresh: the peg may have turned).
+        z_contact = robot.arm.tcp_height()
+        self.z_plane = z_contact
+        heights: deque[float] = deque(maxlen=PLANE_WINDOW)
         # Every new search starts at the centre again, its spiral turned by the golden angle:
         # the hole is likeliest near the nominal centre, and the points of the last spiral led
         # to a wrong contact state.
@@ -202,10 +206,11 @@ class ContactPhases:
         for target in spiral_points(self.hole_xy, cfg.spiral_pitch, cfg.hop_step,
                                     cfg.search_radius, turn=self.retries * GOLDEN_ANGLE):
             z = self._touch_down(target - low)
-            self.z_plane = float(np.median(heights))
             if self.z_plane - z > cfg.drop_threshold:
                 return
-            heights.append(z)
+            if z - self.z_plane <= 0.5 * cfg.drop_threshold:  # not on something higher
+                heights.append(z)
+                self.z_plane = max(z_contact, *heights)
             self._check_timeout("search")
 
     def _touch_down(self, tcp_xy: np.ndarray) -> float:

@@ -24,9 +24,10 @@ peg is held and does not estimate it. docs/assembly.md states every phase with i
     An Archimedes spiral ``r = pitch * theta / (2 pi)`` of touch-downs around the nominal hole
     centre: the lowest rim point is lifted, carried in free air to the next point and lowered
     until the contact force reaches ``contact_force``, pressed with ``press_force``. Sunk by
-    ``drop_threshold`` below the plane (the median height of the last five touch-downs: the
-    peg's turn in the pads moves the rim point by tenths of a millimetre over a search): the
-    rim point is in the hole, two-point contact (Figure 2b). Nothing rubs, so no friction turns the peg in the pads.
+    ``drop_threshold`` below the plane (the approach's plane contact, or the highest of the last
+    five touch-downs where the peg's turn in the pads has raised the plane's TCP height since):
+    the rim point is in the hole, two-point contact (Figure 2b). Nothing rubs, so no friction
+    turns the peg in the pads.
 ``slide``
     Pressing lightly with free lateral axes, a lateral bias along the tilt plane (lowest rim
     point leading) slides the peg until the rim point meets the wall and the tilted face, now

@@ -78,7 +78,8 @@ class AssemblyConfig:
         search_radius: Largest spiral radius [m]; the spiral starts again from its centre
             beyond it (the hole lies within its own radius of the nominal position).
         drop_threshold: Depth of a touch-down below the plane (TCP height; the plane's is the
-            median of the last five touch-downs) that declares two-point contact [m];
+            approach's plane contact, or the highest of the last five touch-downs where they
+            landed higher) that declares two-point contact [m];
             touch-downs do not rub, so neighbouring heights on the plane differ by hundredths
             of a millimetre.
         slide_speed: Free sliding speed of the slide under its bias [m/s] (the lateral
