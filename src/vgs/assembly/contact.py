@@ -16,71 +16,27 @@ from vgs.assembly.spiral import GOLDEN_ANGLE, spiral_points
 from vgs.control.transforms import exp_so3
 
 ROT_DAMPING = 2.5  # lower bound of the rotational admittance damping in contact [N m s/rad]
-
-
 CONTACT_DAMPING = 300.0  # lateral admittance damping in contact: 3x the servo-loop minimum [N s/m]
-
-
 ENTRY_DEPTH = 0.004  # descent below the three-point height that means "entered the hole" [m]
-
-
 SETTLE_TIME = 0.3  # still time before taring [s]
-
-
 LENGTH_TOLERANCE = 0.15  # the product data's length tolerance: the transport clears it
-
-
 LOST_WIDTH_FRACTION = 0.8  # finger width below this fraction of the diameter: peg lost
-
-
 RETRY_LIFT = 0.012  # lift before a new search [m]
-
-
 ROT_COMPLIANCE_ANGLE = math.radians(2.0)  # reference lead that loads the grasp to its limit
-
-
 SLIDE_SETTLE_TIME = 0.3  # light press on the rim before the slide's bias [s]
-
-
 THREE_POINT_FRACTION = 0.5  # of D sin(tilt): the least depth of three-point contact
-
-
 CLIMB_TRAVEL = 0.003  # rising this far from the slide's deepest point: climbing out [m]
-
-
 THREE_POINT_TIME = 0.3  # moved less than a quarter of the slide speed in this time: still [s]
-
-
 MAX_RETRIES = 3  # new searches after a wrong contact-state decision
-
-
 ALIGN_STEP = math.radians(3.0)  # largest turn towards upright of one alignment adjustment
-
-
 MAX_ALIGN_ADJUSTMENTS = 15  # adjustments in one alignment before it is judged lost
-
-
 MAX_INSERT_STALLS = 4  # consecutive stalled wiggles before the insertion is judged lost
-
-
 PLANE_CONTACT_MARGIN = 0.004  # plane contact this far beyond the hole's reach [m]
-
-
 HOP_HEIGHT = 0.001  # lift of the lowest rim point above the plane between two hops [m]
-
-
 HOP_PRESS_TIME = 0.15  # press at each hop before the height is read [s]
-
-
 HOP_LIFT_SPEED = 0.02  # speed of the lift before each free-air move [m/s]
-
-
 HOP_SPEED = 0.01  # free-air speed between touch-downs [m/s]
-
-
 HOP_SETTLE = 0.1  # still time before each touch-down [s]
-
-
 HOP_DESCENT_SPEED = 0.003  # speed of each touch-down [m/s]
 
 

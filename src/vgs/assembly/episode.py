@@ -146,7 +146,7 @@ class GraspWatch:
             moment += sign * float(np.dot(torque, pinch))
         if self.cell.stiction is not None and self.cell.stiction.stuck:
             # What the pads' stick state carries beyond their contacts' friction.
-            moment += float(self.cell.stiction.gripper_wrench(pads=False)[3][1])
+            moment += float(self.cell.stiction.weld_wrench()[1][1])
         self.peak_moment = max(self.peak_moment, abs(moment))
 
 

@@ -95,6 +95,7 @@ class PadStiction:
         self.capacity_per_newton = grasp_moment_capacity(cfg) / (2.0 * cfg.force)
         self._qfrc = np.zeros(model.nv)
         self._mask = np.zeros(0)
+        self._weights = np.zeros(0)
         self._vel = np.zeros(6)
         self._vel_housing = np.zeros(6)
         # Ground truth for records and tests: how often the pads broke loose, the last load.
@@ -169,6 +170,20 @@ class PadStiction:
         n_left, n_right = self._select_pad_rows(pads)
         return (n_left, n_right, *self._selected_wrench())
 
+    def weld_wrench(self) -> tuple[np.ndarray, np.ndarray]:
+        """The wrench the weld alone exerts on the peg while the pads stick (zero otherwise):
+        ``gripper_wrench(pads=False)``'s force and moment, without reading the contacts."""
+        d = self.data
+        mask = self._mask
+        if mask.shape[0] != d.nefc:
+            mask = self._mask = np.zeros(d.nefc)
+        else:
+            mask.fill(0.0)
+        ne = d.ne  # equality rows come first
+        if ne:
+            mask[:ne] = d.efc_id[:ne] == self.eq
+        return self._selected_wrench()
+
     def _select_pad_rows(self, pads: bool) -> tuple[float, float]:
         """Mark the constraint rows of the gripper's wrench on the peg (the pad contacts'
         unless ``pads`` is False, and the weld's) and return the pads' normal forces [N]
@@ -178,26 +193,33 @@ class PadStiction:
         if mask.shape[0] != d.nefc:
             mask = self._mask = np.zeros(d.nefc)
         else:
-            mask[:] = 0.0
+            mask.fill(0.0)
         n_left = n_right = 0.0
         if d.ncon:
+            # Plain Python over the few contacts: per tick, numpy's per-call overhead on arrays
+            # this small cost more than the loop (this method runs once per control tick).
             con = d.contact
-            geom, adr, dim = con.geom, con.efc_address, con.dim
-            peg_first = geom[:, 0] == self.peg_geom
-            other = np.where(peg_first, geom[:, 1], geom[:, 0])
-            left = other == self.pads[0]
-            right = other == self.pads[1]
-            on_pad = (peg_first | (geom[:, 1] == self.peg_geom)) & (left | right) & (adr >= 0)
-            for i in np.flatnonzero(on_pad):
-                a = int(adr[i])
-                if pads:
-                    mask[a:a + int(dim[i])] = 1.0
-                if left[i]:
-                    n_left += float(d.efc_force[a])
+            efc_force = d.efc_force
+            peg, (pad_left, pad_right) = self.peg_geom, self.pads
+            for (g0, g1), a, n in zip(con.geom.tolist(), con.efc_address.tolist(),
+                                      con.dim.tolist(), strict=True):
+                if g0 == peg:
+                    other = g1
+                elif g1 == peg:
+                    other = g0
                 else:
-                    n_right += float(d.efc_force[a])
+                    continue
+                if a < 0 or (other != pad_left and other != pad_right):
+                    continue
+                if pads:
+                    mask[a:a + n] = 1.0
+                if other == pad_left:
+                    n_left += float(efc_force[a])
+                else:
+                    n_right += float(efc_force[a])
         ne = d.ne  # equality rows come first
-        mask[:ne] = d.efc_id[:ne] == self.eq
+        if ne:
+            mask[:ne] = d.efc_id[:ne] == self.eq
         return n_left, n_right
 
     def _selected_wrench(self) -> tuple[np.ndarray, np.ndarray]:
@@ -205,7 +227,11 @@ class PadStiction:
         marked: their constraint forces mapped onto the peg's free joint (``J^T f``), the
         world-frame force at the peg's origin and the torque in the peg's frame."""
         m, d = self.model, self.data
-        mujoco.mj_mulJacTVec(m, d, self._qfrc, self._mask * d.efc_force[:d.nefc])
+        weights = self._weights
+        if weights.shape[0] != d.nefc:
+            weights = self._weights = np.empty(d.nefc)
+        np.multiply(self._mask, d.efc_force[:d.nefc], out=weights)
+        mujoco.mj_mulJacTVec(m, d, self._qfrc, weights)
         q = self._qfrc[self.peg_dofs]
         f = q[:3]
         tau = d.xmat[self.peg].reshape(3, 3) @ q[3:]
