@@ -173,27 +173,29 @@ class PadStiction:
     def weld_wrench(self) -> tuple[np.ndarray, np.ndarray]:
         """The wrench the weld alone exerts on the peg while the pads stick (zero otherwise):
         ``gripper_wrench(pads=False)``'s force and moment, without reading the contacts."""
-        d = self.data
-        mask = self._mask
-        if mask.shape[0] != d.nefc:
-            mask = self._mask = np.zeros(d.nefc)
-        else:
-            mask.fill(0.0)
-        ne = d.ne  # equality rows come first
-        if ne:
-            mask[:ne] = d.efc_id[:ne] == self.eq
+        self._mark_weld_rows(self._fresh_mask())
         return self._selected_wrench()
+
+    def _fresh_mask(self) -> np.ndarray:
+        """The row mask of :meth:`_selected_wrench`, zeroed and sized to this step's rows."""
+        if self._mask.shape[0] != self.data.nefc:
+            self._mask = np.zeros(self.data.nefc)
+        else:
+            self._mask.fill(0.0)
+        return self._mask
+
+    def _mark_weld_rows(self, mask: np.ndarray) -> None:
+        """Mark the weld's constraint rows (none unless the pads stick)."""
+        ne = self.data.ne  # equality rows come first
+        if ne:
+            mask[:ne] = self.data.efc_id[:ne] == self.eq
 
     def _select_pad_rows(self, pads: bool) -> tuple[float, float]:
         """Mark the constraint rows of the gripper's wrench on the peg (the pad contacts'
         unless ``pads`` is False, and the weld's) and return the pads' normal forces [N]
         (with elliptic cones a contact's first row is its normal force)."""
         d = self.data
-        mask = self._mask
-        if mask.shape[0] != d.nefc:
-            mask = self._mask = np.zeros(d.nefc)
-        else:
-            mask.fill(0.0)
+        mask = self._fresh_mask()
         n_left = n_right = 0.0
         if d.ncon:
             # Plain Python over the few contacts: per tick, numpy's per-call overhead on arrays
@@ -217,9 +219,7 @@ class PadStiction:
                     n_left += float(efc_force[a])
                 else:
                     n_right += float(efc_force[a])
-        ne = d.ne  # equality rows come first
-        if ne:
-            mask[:ne] = d.efc_id[:ne] == self.eq
+        self._mark_weld_rows(mask)
         return n_left, n_right
 
     def _selected_wrench(self) -> tuple[np.ndarray, np.ndarray]:
