@@ -125,12 +125,8 @@ def test_grasp_holds_with_the_rim_on_the_table() -> None:
     for _ in range(int(round(5.0 / robot.dt))):
         d.xfrc_applied[peg, 3:] = moment * d.site_xmat[cell.ids.tcp_site].reshape(3, 3)[:, 1]
         robot.tick()
-    # The weld carries what the pads' contacts do not; the grasp watch's shortcut to it reads
-    # the same wrench as the general mapping.
-    f_weld, m_weld = cell.stiction.weld_wrench()
-    _, _, f_all, m_all = cell.stiction.gripper_wrench(pads=False)
-    assert np.array_equal(f_weld, f_all) and np.array_equal(m_weld, m_all)
-    assert abs(m_weld[1]) > 0.0
+    # The weld carries part of the moment about the pinch axis (what the grasp watch records).
+    assert abs(cell.stiction.weld_wrench()[1][1]) > 0.0
     d.xfrc_applied[peg] = 0.0
     assert abs(turn_in_pads(cell) - start) < 0.2
     assert cell.stiction.breaks == breaks
@@ -143,6 +139,7 @@ def test_pads_let_go_when_the_gripper_opens() -> None:
     robot.gripper.command(cell.cfg.gripper.stroke)
     robot.run(0.5)
     assert not cell.stiction.stuck
+    assert not np.any(cell.stiction.weld_wrench()[1])  # a released weld carries nothing
     # Nothing holds the peg: it has fallen from the lift height onto the table.
     assert cell.peg_pose()[0][2] < 2 * cell.cfg.peg.radius
 

@@ -111,7 +111,7 @@ class PadStiction:
         """Check the latch after the physics steps of one control tick."""
         d, grip = self.data, self.cfg.force
         stuck = self.stuck
-        n_left, n_right = self._select_pad_rows(pads=True)
+        n_left, n_right = self._select_pad_rows()
         if not stuck and min(n_left, n_right) < ENGAGE_FRACTION * grip:
             self.last_load = 0.0  # no pinch: nothing to stick (the grasp's idle ticks)
             return
@@ -162,17 +162,10 @@ class PadStiction:
         return (float(np.linalg.norm(v_peg - v_hsg)) < STICK_SPEED
                 and float(np.linalg.norm(w_rel)) < STICK_RATE)
 
-    def gripper_wrench(self, pads: bool = True) -> tuple[float, float, np.ndarray, np.ndarray]:
-        """The pads' normal forces and the wrench the gripper (the pads' contacts, unless
-        ``pads`` is False, and the weld while stuck) exerts on the peg:
-        ``(N_left, N_right, f, m)``, the force and the moment about the TCP in the tool frame
-        [N, N m]."""
-        n_left, n_right = self._select_pad_rows(pads)
-        return (n_left, n_right, *self._selected_wrench())
-
     def weld_wrench(self) -> tuple[np.ndarray, np.ndarray]:
-        """The wrench the weld alone exerts on the peg while the pads stick (zero otherwise):
-        ``gripper_wrench(pads=False)``'s force and moment, without reading the contacts."""
+        """The wrench the weld alone exerts on the peg while the pads stick (zero otherwise): the
+        force and the moment about the TCP in the tool frame [N, N m], what the stick state
+        carries beyond the pads' contacts (the grasp watch's record)."""
         self._mark_weld_rows(self._fresh_mask())
         return self._selected_wrench()
 
@@ -190,10 +183,10 @@ class PadStiction:
         if ne:
             mask[:ne] = self.data.efc_id[:ne] == self.eq
 
-    def _select_pad_rows(self, pads: bool) -> tuple[float, float]:
-        """Mark the constraint rows of the gripper's wrench on the peg (the pad contacts'
-        unless ``pads`` is False, and the weld's) and return the pads' normal forces [N]
-        (with elliptic cones a contact's first row is its normal force)."""
+    def _select_pad_rows(self) -> tuple[float, float]:
+        """Mark the constraint rows of the gripper's wrench on the peg (the pad contacts' and
+        the weld's) and return the pads' normal forces [N] (with elliptic cones a contact's
+        first row is its normal force)."""
         d = self.data
         mask = self._fresh_mask()
         n_left = n_right = 0.0
@@ -213,8 +206,7 @@ class PadStiction:
                     continue
                 if a < 0 or (other != pad_left and other != pad_right):
                     continue
-                if pads:
-                    mask[a:a + n] = 1.0
+                mask[a:a + n] = 1.0
                 if other == pad_left:
                     n_left += float(efc_force[a])
                 else:
