@@ -75,8 +75,10 @@ COLUMNS: dict[str, Column] = {
                                              "grasp point (NaN when not grasped)"),
     "assembly_success": Column("", "bool", "the peg ended inserted to the insertion depth"),
     "failure_reason": Column("", "str", "empty on success, else what stopped the episode "
-                                        "(grasp, timeout:<phase>, dropped, unstable, "
-                                        "not_inserted, peg_lost, error:..., worker_lost)"),
+                                        "(grasp, timeout:<phase>, unstable, "
+                                        "not_inserted, peg_lost, error:..., worker_lost; in "
+                                        "training: cutoff:<phase>, stopped at the reward "
+                                        "threshold, and no_assembly)"),
     "assembly_time_s": Column("s", "float", "simulated time from the end of the grasp to the "
                                             "end of the insertion (NaN without an assembly)"),
     **{f"time_{p}_s": Column("s", "float", f"simulated time spent in the {p} phase")

@@ -65,11 +65,11 @@ class Recovery(Exception):
 
 
 class PhaseTimeout(Exception):
-    """A phase ran past its timeout."""
+    """A phase ran past its timeout (or, ``cutoff``, the assembly past its time limit)."""
 
-    def __init__(self, phase: str) -> None:
+    def __init__(self, phase: str, cutoff: bool = False) -> None:
         super().__init__(phase)
-        self.phase = phase
+        self.phase, self.cutoff = phase, cutoff
 
 
 class PegLost(Exception):

@@ -179,7 +179,8 @@ class EpisodeRunner:
         return cam.capture(cell.data)
 
     def run(self, seed: int, policy: Policy, peg: PegConfig | None = None,
-            trace: bool = False) -> tuple[EpisodeRecord, Robot, Heightmap]:
+            trace: bool = False, assemble: bool = True, time_limit: float | None = None
+            ) -> tuple[EpisodeRecord, Robot, Heightmap]:
         """Run one whole episode.
 
         Args:
@@ -187,6 +188,11 @@ class EpisodeRunner:
             policy: Chooses the grasp from the heightmap.
             peg: Peg of this episode (default: the configured one).
             trace: Keep per-tick signals in ``robot.trace``.
+            assemble: Run the assembly after a successful grasp; ``False`` ends the episode
+                with the peg held (``failure_reason = "no_assembly"``), for learners whose
+                reward is the grasp's alone (the baseline).
+            time_limit: Stop the assembly once it has taken longer than this [s]
+                (``cutoff:<phase>``; :class:`vgs.assembly.strategy.AssemblyModule`).
 
         Returns:
             The record, the robot (for its trace) and the heightmap.
@@ -216,10 +222,13 @@ class EpisodeRunner:
         if not result.success:
             record.failure_reason = "grasp"
             return record, robot, hm
+        if not assemble:
+            record.failure_reason = "no_assembly"
+            return record, robot, hm
         nominal = self.cfg.cell.peg
         hole = self.cfg.cell.hole
         module = AssemblyModule(robot, self.cfg.assembly, nominal, hole.nominal_xy, hole.depth,
-                                hole.clearance)
+                                hole.clearance, time_limit=time_limit)
         watch = GraspWatch(robot)
         robot.observers.append(watch)
         module.run(record)

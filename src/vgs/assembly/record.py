@@ -24,7 +24,9 @@ class EpisodeRecord:
             to the grasp point [m] (NaN when not grasped). For analysis only.
         success: Whether the peg ended inserted to the insertion depth.
         failure_reason: Empty on success, else what stopped the episode (``grasp``,
-            ``timeout:<phase>``, ``dropped``, ``unstable``, ``not_inserted``).
+            ``timeout:<phase>``, ``peg_lost``, ``unstable``, ``not_inserted``; in training only,
+            ``cutoff:<phase>``, an assembly stopped at the reward threshold, and
+            ``no_assembly``, a grasp not followed by an assembly).
         assembly_time: Simulated seconds from the end of the grasp to the end of insertion.
         phase_times: Simulated seconds spent in each phase of :data:`PHASES`.
         adjustments: Number of alignment adjustments (wiggle iterations, paper Section 2.2).

@@ -103,12 +103,18 @@ class AssemblyModule(ContactPhases):
         nominal_hole_xy: Nominal hole centre (the fixture drawing) [m].
         hole_surface_z: Nominal height of the hole's top face [m].
         hole_clearance: Nominal diametral clearance of the hole (the fixture drawing) [m].
+        time_limit: Stop the assembly once it has taken longer than this [s] (checked where
+            the phase timeouts are), recording ``cutoff:<phase>``: training uses the reward
+            threshold here, when an assembly slower than it earns no assembly reward whatever
+            its end. ``None``: run to the end.
     """
 
     def __init__(self, robot: Robot, cfg: AssemblyConfig, nominal_peg: PegConfig,
                  nominal_hole_xy: tuple[float, float], hole_surface_z: float,
-                 hole_clearance: float) -> None:
+                 hole_clearance: float, time_limit: float | None = None) -> None:
         self.robot = robot
+        self.time_limit = time_limit
+        self.start = robot.time
         self.cfg = cfg
         self.peg = nominal_peg
         self.hole_xy = np.asarray(nominal_hole_xy, dtype=float)
@@ -139,15 +145,18 @@ class AssemblyModule(ContactPhases):
                                    - self.phase_start)
 
     def _check_timeout(self, phase: str) -> None:
-        spent = self.phase_times.get(phase, 0.0) + self.robot.time - self.phase_start
+        now = self.robot.time
+        spent = self.phase_times.get(phase, 0.0) + now - self.phase_start
         if spent > self._timeouts[phase]:
             raise PhaseTimeout(phase)
+        if self.time_limit is not None and now - self.start > self.time_limit:
+            raise PhaseTimeout(phase, cutoff=True)
 
     # -- the whole module --------------------------------------------------------------------
 
     def run(self, record: EpisodeRecord) -> None:
         """Run all phases, filling ``record`` (times, adjustments, failure reason)."""
-        start = self.robot.time
+        start = self.start = self.robot.time
         sequence = (
             ("transport", self.transport),
             ("approach", self.approach),
@@ -176,7 +185,7 @@ class AssemblyModule(ContactPhases):
             record.success = True
         except PhaseTimeout as exc:
             self._end(exc.phase)
-            record.failure_reason = f"timeout:{exc.phase}"
+            record.failure_reason = f"{'cutoff' if exc.cutoff else 'timeout'}:{exc.phase}"
         except PegLost:
             self._end(self.robot.phase)
             record.failure_reason = "peg_lost"

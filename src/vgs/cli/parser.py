@@ -41,7 +41,8 @@ def _config_flags(p: argparse.ArgumentParser, sections: tuple[str, ...] = ()) ->
     with ``sections`` (the command reads only those) ``--set`` takes only their keys, without
     them the command also takes the cell's override flags (``--peg-mass`` ...)."""
     p.add_argument("--profile", default="paper",
-                   help="configuration profile: smoke, quick, medium or paper "
+                   help="configuration profile: smoke, quick, medium, paper or paper-light "
+                        "(the paper's protocol sized for a 2-core CPU; docs/training.md) "
                         "(default: paper; the cell is the same in all profiles)")
     group = p.add_argument_group("configuration overrides (SI units; vgs config lists every key)")
     if not sections:

@@ -142,12 +142,24 @@ class TrainConfig:
             same network, runs their physics in K worker processes and then updates in episode
             order: for machines with many cores, the network's information is up to K - 1
             episodes older when it decides.
+        assemble_baseline: Run the assembly after the baseline's training grasps (default, as
+            in the paper). Its reward is the grasp's alone, so ``False`` (``no_assembly``
+            rows) gives the same rewards, the same updates and the same networks at a fifth of
+            the simulation, without the baseline's assembly times in the training table.
+        stop_at_threshold: Stop a VGS training assembly once it has taken longer than the
+            frozen reward threshold (``cutoff:<phase>`` rows): slower than the threshold it
+            earns no assembly reward however it ends, so rewards, updates and networks are the
+            same as with the whole assembly, and the training table's assembly times are
+            censored at the threshold. The exploration phase, which derives the threshold,
+            always runs whole assemblies.
     """
 
     episodes: int = 5000
     checkpoint_every: int = 50
     device: str = "auto"
     parallel_episodes: int = 1
+    assemble_baseline: bool = True
+    stop_at_threshold: bool = False
 
     def __post_init__(self) -> None:
         if self.episodes < 1:

@@ -51,10 +51,13 @@ class EpisodeTask:
 
 @dataclass(frozen=True)
 class GraspTask:
-    """One training episode's physics: the scene (seed) and the grasp the learner chose."""
+    """One training episode's physics: the scene (seed), the grasp the learner chose, whether to
+    assemble after it and the assembly's time limit (:meth:`EpisodeRunner.run`)."""
 
     seed: int
     command: GraspCommand
+    assemble: bool = True
+    time_limit: float | None = None
 
 
 class EpisodeWorker:
@@ -114,7 +117,8 @@ class EpisodeWorker:
     def grasp(self, task: GraspTask) -> EpisodeRecord:
         """One training episode with its grasp already chosen (an exception propagates: the
         training run stops and resumes from its checkpoint)."""
-        record, _, _ = self.runner.run(task.seed, lambda hm: task.command)
+        record, _, _ = self.runner.run(task.seed, lambda hm: task.command,
+                                       assemble=task.assemble, time_limit=task.time_limit)
         return record
 
 

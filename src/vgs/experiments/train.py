@@ -48,6 +48,7 @@ import math
 import os
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -182,7 +183,8 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
         write_json(out / "run.json", new_meta)
 
     log = _TrainLog(out, rows, mode, state.episode, total, progress, position)
-    source = _EpisodeSource(cfg, agent, runner, rng, schedule, backend, ray_address)
+    source = _EpisodeSource(cfg, agent, runner, rng, schedule, backend, ray_address,
+                            lambda: _assembly_plan(cfg, mode, state))
     try:
         for episode in log.bar:
             t0 = time.perf_counter()
@@ -230,6 +232,23 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
     return out
 
 
+def _assembly_plan(cfg: ExperimentConfig, mode: str, state: TrainState
+                   ) -> tuple[bool, float | None]:
+    """``(assemble, time_limit)`` for the episodes chosen now (episode ``state.episode`` on).
+
+    The baseline skips the assembly when ``train.assemble_baseline`` is off (its reward is the
+    grasp's). VGS stops an assembly at the reward threshold when ``train.stop_at_threshold`` is
+    on and the threshold no longer moves: given (``reward.threshold_s``) or frozen at the end of
+    the exploration phase. An assembly stopped there earns no r_AM, as it would not at its end.
+    """
+    if mode == "baseline":
+        return cfg.train.assemble_baseline, None
+    frozen = cfg.reward.threshold_s is not None or state.episode >= cfg.agent.random_episodes
+    if cfg.train.stop_at_threshold and frozen and state.threshold is not None:
+        return True, float(state.threshold)
+    return True, None
+
+
 class _EpisodeSource:
     """The episodes' grasps and records, in episode order.
 
@@ -241,8 +260,11 @@ class _EpisodeSource:
 
     def __init__(self, cfg: ExperimentConfig, agent: GraspAgent, runner: EpisodeRunner,
                  rng: np.random.Generator, schedule: int, backend: str = "local",
-                 ray_address: str | None = None) -> None:
+                 ray_address: str | None = None,
+                 plan: Callable[[], tuple[bool, float | None]] = lambda: (True, None)
+                 ) -> None:
         self.cfg, self.agent, self.runner, self.rng = cfg, agent, runner, rng
+        self.plan = plan
         self.schedule = schedule
         self.k = cfg.train.parallel_episodes
         self.collector = (TrainingPool(cfg, self.k, backend, ray_address)
@@ -264,18 +286,20 @@ class _EpisodeSource:
                 chosen["action"], chosen["hm"] = action, hm
                 return action_to_command(action, hm)
 
-            record, _, _ = self.runner.run(seed, policy)
+            assemble, limit = self.plan()
+            record, _, _ = self.runner.run(seed, policy, assemble=assemble, time_limit=limit)
             return record, seed, epsilon, chosen["action"], chosen["hm"]
         if episode not in self.pending:  # first episode of a batch: choose K grasps at once
             total = self.cfg.train.episodes
             batch_end = min(episode - episode % self.k + self.k, total)
+            assemble, limit = self.plan()
             for e in range(episode, batch_end):
                 seed_e = episode_seed(self.cfg.seed, e)
                 eps_e = agent.epsilon(e, self.schedule)
                 hm_e = self.runner.observe(seed_e)
                 act_e = agent.act(hm_e.color, hm_e.depth, eps_e, peg_mask(hm_e.depth), rng,
                                   skip_q_if_exploring=True)
-                task = GraspTask(seed_e, action_to_command(act_e, hm_e))
+                task = GraspTask(seed_e, action_to_command(act_e, hm_e), assemble, limit)
                 self.pending[e] = (self.collector.submit(task), seed_e, eps_e, act_e, hm_e)
         handle, seed, epsilon, action, hm = self.pending.pop(episode)
         return self.collector.result(handle), seed, epsilon, action, hm
