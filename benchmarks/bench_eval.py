@@ -13,6 +13,14 @@ Prints
   local Ray instance included, and without it);
 * the wall time of ``vgs reproduce --profile quick`` (``--quick`` runs it in a subprocess;
   ``--quick-dir`` reads the stage times of a finished run) (target: 15 minutes);
+* the ``paper-light`` protocol (issue 18: light backbone, R = 16, features rotation, the
+  baseline's training grasps without assembly, VGS's training assemblies stopped at the
+  threshold, 1000 tests per learned policy and condition) projected from parts measured here in
+  CPU seconds of one process: a whole episode, the same stopped at the median of their assembly
+  times (the threshold's percentile), a grasp without assembly (grasps 0-35 mm from the centre
+  along the axis, like the sweep's), a replay's re-rendering, one training step and one greedy
+  decision; core-hours divided by the cores times the measured scaling efficiency
+  (target 2.5 h); ``--light-dir`` prints a finished run's stage wall times beside it;
 * an estimate of the ``paper`` profile's wall time on this machine, from measured parts: the
   mean wall time of a training episode's simulation (from the quick run's ``episodes.csv``,
   network time removed), one training step and one greedy decision of each backbone at the
@@ -40,6 +48,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from vgs.assembly.episode import EpisodeRunner, center_policy, offset_policy
 from vgs.config import profile
 from vgs.experiments.evaluate import EvalSpec, evaluate_many
 
@@ -124,6 +133,65 @@ def network_step_seconds(backbone: str, threads: int, rotate: str = "input",
     return update, decide
 
 
+def light_parts(episodes: int) -> dict[str, float]:
+    """CPU seconds (this process) per episode of the ``paper-light`` protocol's parts."""
+    cfg = profile("paper-light")
+    runner = EpisodeRunner(cfg)
+    runner.run(10_000, center_policy())  # compile the cell, warm the caches
+
+    def cpu(call, *args, **kwargs) -> tuple[float, object]:
+        t0 = time.process_time()
+        out = call(*args, **kwargs)
+        return time.process_time() - t0, out
+
+    grasps = [(seed, offset_policy(float(off)))
+              for seed, off in enumerate(np.linspace(-0.035, 0.035, episodes))]
+    whole, times = [], []
+    for seed, policy in grasps:
+        c, (rec, _, _) = cpu(runner.run, seed, policy)
+        whole.append(c)
+        if rec.success:
+            times.append(rec.assembly_time)
+    limit = float(np.percentile(times, cfg.reward.threshold_percentile))
+    cut = [cpu(runner.run, seed, policy, time_limit=limit)[0] for seed, policy in grasps]
+    grasp = [cpu(runner.run, seed, policy, assemble=False)[0] for seed, policy in grasps]
+    render = [cpu(runner.observe, seed)[0] for seed, _ in grasps]
+    update, decide = network_step_seconds(cfg.network.backbone, 1, cfg.network.rotate,
+                                          cfg.network.precision)
+    return {"whole": float(np.mean(whole)), "cut": float(np.mean(cut)), "limit_s": limit,
+            "grasp": float(np.mean(grasp)), "render": float(np.mean(render)),
+            "update": update, "decide": decide,
+            "success": len(times) / episodes}
+
+
+def light_projection(parts: dict[str, float], cores: int, efficiency: float) -> None:
+    """Print the ``paper-light`` protocol's projected core-hours and wall time."""
+    cfg = profile("paper-light")
+    n, n_random = cfg.train.episodes, cfg.agent.random_episodes
+    greedy = n - n_random
+    network = n * (parts["update"] + parts["render"]) + greedy * parts["decide"]
+    base_sim = n * (parts["grasp"] if not cfg.train.assemble_baseline else parts["whole"])
+    vgs_sim = n_random * parts["whole"] + greedy * (
+        parts["cut"] if cfg.train.stop_at_threshold else parts["whole"])
+    n_tests = 2 * cfg.eval.episodes * len(cfg.reproduce.conditions)
+    tests = n_tests * (parts["whole"] + parts["decide"])
+    rows = [("baseline training", network + base_sim), ("VGS training", network + vgs_sim),
+            (f"{n_tests} tests", tests)]
+    total = sum(c for _, c in rows)
+    print(f"paper-light protocol ({cfg.network.backbone}, R = {cfg.network.num_rotations}, "
+          f"rotate={cfg.network.rotate}; {n} grasps per policy, {n_tests} tests), "
+          "from parts measured in CPU seconds of one process:")
+    print(f"  episode: whole {parts['whole']:.2f} s ({parts['success']:.0%} assembled), "
+          f"stopped at {parts['limit_s']:.1f} s {parts['cut']:.2f} s, grasp only "
+          f"{parts['grasp']:.2f} s; replay render {parts['render']:.3f} s, training step "
+          f"{parts['update']:.3f} s, decision {parts['decide']:.3f} s")
+    for name, core_s in rows:
+        print(f"  {name:<18} {core_s / 3600:5.2f} core-h")
+    wall = total / (cores * efficiency) / 3600
+    print(f"  total {total / 3600:.2f} core-h -> {wall:.2f} h on {cores} cores at scaling "
+          f"efficiency {efficiency:.2f} (target 2.5 h)")
+
+
 def quick_wall(run_quick: bool, quick_dir: Path | None) -> tuple[float | None, Path | None]:
     if run_quick:
         out = Path(tempfile.mkdtemp()) / "quick"
@@ -148,6 +216,11 @@ def main() -> None:
     parser.add_argument("--quick-dir", type=Path,
                         help="a finished quick reproduction to read stage times from")
     parser.add_argument("--no-ray", action="store_true", help="skip the Ray measurement")
+    parser.add_argument("--light-episodes", type=int, default=8,
+                        help="episodes per measured part of the paper-light projection (0: skip)")
+    parser.add_argument("--light-dir", type=Path,
+                        help="a finished `vgs reproduce --profile paper-light` folder: print its "
+                             "stage wall times beside the projection")
     args = parser.parse_args()
     cores = os.cpu_count() or 1
     print(f"machine: {cores} CPU cores; load average before: {os.getloadavg()[0]:.2f}")
@@ -172,6 +245,15 @@ def main() -> None:
                   f"(start-up {start:.1f} s; without it {(wr - start) / w2:.2f})")
         except ImportError:
             print("ray: not installed (pip install 'vgs[ray]')")
+
+    if args.light_episodes:
+        light_projection(light_parts(args.light_episodes), cores, min(1.0, eps2 / (2 * eps1)))
+    if args.light_dir is not None:
+        doc = json.loads((args.light_dir / "reproduce.json").read_text())
+        walls = doc["stage_wall_s"]
+        print(f"  measured run {args.light_dir}: " + ", ".join(
+            f"{k} {v / 3600:.2f} h" for k, v in walls.items())
+              + f" = {sum(walls.values()) / 3600:.2f} h")
 
     wall, qdir = quick_wall(args.quick, args.quick_dir)
     if wall is None:

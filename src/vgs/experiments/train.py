@@ -6,7 +6,9 @@ The loop reads top to bottom; one iteration is one episode:
    gives the heightmap s;
 2. the agent picks (rotation k, row i, col j) epsilon-greedily (random pixel on the peg while
    exploring); the pixel becomes the world grasp point and theta_k the closing direction;
-3. the grasp primitive and the assembly module run; the episode record comes back;
+3. the grasp primitive and the assembly module run; the episode record comes back (the
+   baseline skips the assembly with ``train.assemble_baseline`` off, and VGS stops it at the
+   frozen threshold with ``train.stop_at_threshold``: neither changes a reward);
 4. reward R = r_G + r_AM (paper eq. 5); r_AM only in ``vgs`` mode, when the assembly succeeded
    faster than the threshold;
 5. one SGD step on the executed pixel (plus ``replay_batch`` prioritised replays);
