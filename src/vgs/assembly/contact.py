@@ -346,8 +346,13 @@ class ContactPhases:
         adm = robot.arm.admittance
         robot.arm.absorb_offset()
         adm.wrench_des[:] = [0.0, 0.0, -cfg.press_force, 0.0, 0.0, 0.0]
-        # Compliance in the lateral axes and in rotation lets the hole guide the peg.
-        self._comply(cfg.insert_stiffness)
+        # Compliance in the lateral axes and force control in rotation (K = 0: the offset turns
+        # at M / ROT_DAMPING until the walls' moment vanishes) let the hole guide the peg, also
+        # where it leans across the pinch axis, which the wiggle does not turn: a grasp whose
+        # jaws lay phi off the peg's axis holds it so (the pads lock that angle in). With the
+        # stiffness of the other phases the lean stayed above delta and the insertion jammed
+        # from phi = 5 deg (benchmarks/probe_jaw_misalignment.py, docs/training.md).
+        self._comply(cfg.insert_stiffness, k_rot=0.0)
         z_target = self.z_contact - self.cfg.insertion_depth - 0.003
         last_z = robot.arm.tcp_pose()[0][2]
         n_wiggle = max(2, int(round(cfg.wiggle_period / robot.dt)))
