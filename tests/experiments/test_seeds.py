@@ -65,6 +65,28 @@ def test_mean_gain_of_identical_runs_is_the_run_gain() -> None:
     assert high == pytest.approx(10.0, abs=1e-6)
 
 
+def test_shared_scenes_do_not_average_out_over_runs() -> None:
+    """Four copies of one run on the same scenes: the crossed bootstrap keeps the scenes'
+    spread (the interval of one run); a nested one would shrink it by about sqrt(4)."""
+    rng = np.random.default_rng(5)
+    base = rng.uniform(100, 160, 300)
+    vgs = 0.85 * base + rng.normal(0.0, 20.0, 300)
+    pair = (_table("baseline", base, "s0"), _table("vgs", vgs, "s0"))
+    _, low1, high1 = mean_gain([pair])
+    value, low4, high4 = mean_gain([pair] * 4)
+    assert value == pytest.approx(mean_gain([pair])[0])
+    assert (high4 - low4) == pytest.approx(high1 - low1, rel=0.2)
+    assert (high4 - low4) > 0.8 * (high1 - low1)
+
+
+def test_tables_on_other_episodes_are_refused() -> None:
+    base = np.full(10, 120.0)
+    pair = (_table("baseline", base, "s0"), _table("vgs", 0.9 * base, "s0"))
+    other = (_table("baseline", base[:8], "s1"), _table("vgs", 0.9 * base[:8], "s1"))
+    with pytest.raises(ConfigError):
+        mean_gain([pair, other])
+
+
 def test_one_run_twice_is_refused(tmp_path: Path) -> None:
     a = _folder(tmp_path / "a", "s0", 0.1)
     b = _folder(tmp_path / "b", "s0", 0.1)

@@ -13,12 +13,16 @@ several reproduce folders (or their published copies under ``docs/results``) and
 Statistics. For training run ``s`` the gain is ``g_s = 100 (T_base,s - T_vgs,s) / T_base,s`` on
 the mean times of successful assemblies, with the paired bootstrap interval over its test
 episodes. The across-seed estimate is the plain mean ``g = (1/S) sum_s g_s`` (each training run
-weighs the same, whatever its number of successes). Its 95 % interval comes from a two-level
-bootstrap: draw ``S`` training runs with replacement, then, within each drawn run, its test
-episodes with replacement (paired: both policies keep the same scenes), and average the
-resampled gains; percentile interval over 2000 resamples. With two or three seeds the outer
-level has few distinct draws, so the interval is coarse; the table also gives the spread
-between seeds (sample standard deviation of ``g_s``).
+weighs the same, whatever its number of successes). Its 95 % interval comes from a bootstrap
+that follows the design: every training run meets the *same* test scenes, so runs and scenes
+are crossed factors, and a scene that is hard for one run's policies tends to be hard for the
+others'. Each replicate draws ``S`` training runs with replacement and **one** set of test
+scenes with replacement, the same for every drawn run (paired: both policies of a run keep the
+same scenes), and averages the drawn runs' gains on those scenes; percentile interval over 2000
+replicates. (Drawing each run's scenes anew, a nested bootstrap, would treat the shared scenes'
+difficulty as independent noise that averages out over runs, and give too narrow an interval.)
+With two or three seeds the run level has few distinct draws, so the interval is coarse; the
+table also gives the spread between seeds (sample standard deviation of ``g_s``).
 """
 
 from __future__ import annotations
@@ -99,17 +103,26 @@ def load_seeds(folders: list[Path]) -> pd.DataFrame:
 
 def mean_gain(pairs: list[tuple[pd.DataFrame, pd.DataFrame]],
               resamples: int = BOOTSTRAP_RESAMPLES, seed: int = 0) -> tuple[float, float, float]:
-    """Mean over training runs of the gain, with the two-level bootstrap 95 % interval.
+    """Mean over training runs of the gain, with the crossed bootstrap's 95 % interval (runs
+    and one shared draw of test scenes per replicate; module docstring).
 
     Args:
-        pairs: ``(baseline table, VGS table)`` of each training run, on the same test scenes.
+        pairs: ``(baseline table, VGS table)`` of each training run, on the same test scenes
+            (the same episode indices).
         resamples: Bootstrap resamples.
         seed: Seed of the resampling.
 
     Returns:
         ``(mean gain, low, high)`` in percent; the interval is NaN when a run has fewer than
         :data:`vgs.experiments.stats.MIN_SUCCESSES` successes for either policy.
+
+    Raises:
+        ConfigError: If the tables do not hold the same episode indices.
     """
+    indices = {tuple(np.sort(t["index"].to_numpy())) for pair in pairs for t in pair}
+    if len(indices) > 1:
+        raise ConfigError("seeds", "the training runs' tables do not hold the same test "
+                                   "episodes; the crossed bootstrap needs shared scenes")
     arrays = [(*time_arrays(b), *time_arrays(v)) for b, v in pairs]
     gains = [gain_pct(*a) for a in arrays]
     value = float(np.mean(gains)) if gains else math.nan
@@ -118,11 +131,13 @@ def mean_gain(pairs: list[tuple[pd.DataFrame, pd.DataFrame]],
         return value, math.nan, math.nan
     rng = np.random.default_rng(seed)
     out = np.empty(resamples)
+    n = len(arrays[0][0])
     for b in range(resamples):
+        runs = rng.integers(len(arrays), size=len(arrays))
+        i = rng.integers(n, size=n)  # one draw of the shared scenes for every drawn run
         total = 0.0
-        for s in rng.integers(len(arrays), size=len(arrays)):
+        for s in runs:
             tb, ob, tv, ov = arrays[s]
-            i = rng.integers(len(tb), size=len(tb))
             total += gain_pct(tb[i], ob[i], tv[i], ov[i])
         out[b] = total / len(arrays)
     out = out[np.isfinite(out)]
@@ -236,7 +251,8 @@ def seeds_markdown(table: pd.DataFrame, folders: list[Path], dest: Path, figure:
              "VGS network; both meet the same test scenes. Gain: (T_baseline - T_VGS) / "
              "T_baseline on the mean time of successful assemblies, 95 % interval from the "
              "paired bootstrap over test episodes; the mean row averages the runs' gains, its "
-             "interval from the two-level bootstrap (runs, then episodes).", ""]
+             "interval from the crossed bootstrap (training runs and one shared draw of the "
+             "test scenes per replicate: every run met the same scenes).", ""]
     for condition in dict.fromkeys(table["condition"]):
         part = table[table["condition"] == condition]
         paper = PAPER.get(condition, {}).get("gain")
