@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# The cell's published measurements (docs/results/cell_stiction, docs/results/paper_center_stiction),
+# exactly as run for docs/assembly.md. About 20 min for the sweeps and 50 min for the 3 x 1000
+# centre grasps on an idle 2-core host. Each command resumes where it stopped when started again.
+# Usage: scripts/cell_results.sh [OUT]   (default OUT: runs/cell; then copy into docs/results)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+OUT=${1:-runs/cell}
+VGS=.venv/bin/vgs
+$VGS sweep --offsets 9 --trials 50 --workers 2 --out "$OUT/sweep" --no-progress
+$VGS sweep --offsets-mm 0 --trials 200 --workers 2 --out "$OUT/com200" --no-progress
+$VGS sweep --offsets 9 --trials 50 --workers 2 --mass-range 0.15 --length-range 0.15 \
+    --out "$OUT/sweep_mass_length" --no-progress
+for condition in nominal mass length; do
+    $VGS evaluate --profile paper --policy center --condition "$condition" --workers 2 \
+        --out "$OUT/paper_center/eval/center/$condition" --no-progress
+done
+$VGS report "$OUT/paper_center" \
+    --title "Centre heuristic at the paper's scale (vgs evaluate --profile paper --policy center)"
+echo "tables: .venv/bin/python benchmarks/sweep_tables.py $OUT/sweep (com200, sweep_mass_length)"

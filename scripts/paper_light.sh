@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# The paper's protocol with the light backbone for one training seed (issue 18; the `paper-light`
+# profile, docs/training.md): the baseline's training first (about 1 h here: grasps without
+# assembly), then VGS's, then 1000 tests per policy and condition, the report, and its
+# publication under docs/results/paper_light_s<SEED>. Every step resumes from the run folder when
+# started again, also after the folder was moved to another machine (docs/training.md, "Runs
+# that move between machines").
+# Usage: scripts/paper_light.sh SEED
+set -euo pipefail
+cd "$(dirname "$0")/.."
+SEED=${1:?usage: scripts/paper_light.sh SEED}
+OUT=runs/paper_light_s$SEED
+VGS=.venv/bin/vgs
+SET=(--profile paper-light --set "reproduce.train_seeds=($SEED,)")
+# The baseline alone first: it is short, and a finished run needs no checkpoint to move.
+$VGS train --mode baseline "${SET[@]}" --seed "$SEED" --out "$OUT/train/baseline_s$SEED" \
+    --no-progress
+$VGS reproduce "${SET[@]}" --out "$OUT" --no-progress
+$VGS report "$OUT" --title "VGS reproduction report (paper-light, seed $SEED)" \
+    --publish "docs/results/paper_light_s$SEED"
