@@ -56,8 +56,9 @@ class FakeRunner:
         color[depth > 0] = (200, 120, 40)
         return Heightmap(color, depth, (0.35, -0.2), self.cfg.cell.camera.pixel_size)
 
-    def run(self, seed: int, policy: Any, peg: Any = None,
-            trace: bool = False) -> tuple[EpisodeRecord, None, Heightmap]:
+    def run(self, seed: int, policy: Any, peg: Any = None, trace: bool = False,
+            assemble: bool = True, time_limit: float | None = None
+            ) -> tuple[EpisodeRecord, None, Heightmap]:
         peg = peg or self.cfg.cell.peg
         hm = self.observe(seed)
         command = policy(hm)
@@ -69,6 +70,12 @@ class FakeRunner:
                                grasp_success=u != 0, grasp_offset=(u - 3) * 0.004,
                                success=ok, failure_reason="" if ok else "timeout:align",
                                assembly_time=20.0 + 3.0 * u * peg.mass)
+        if record.grasp_success and not assemble:  # as EpisodeRunner.run's shortcuts
+            record.success, record.failure_reason = False, "no_assembly"
+            record.assembly_time = float("nan")
+        elif record.grasp_success and time_limit is not None \
+                and record.assembly_time > time_limit:
+            record.success, record.failure_reason = False, "cutoff:align"
         return record, None, hm
 
 
