@@ -28,8 +28,7 @@ import numpy as np
 from vgs.assembly.episode import EpisodeRunner, offset_policy
 from vgs.assembly.grasp import grasp
 from vgs.assembly.strategy import AssemblyModule
-from vgs.cli.options import apply_override, parse_value
-from vgs.config import profile
+from vgs.cli.options import config_from_args
 from vgs.control.robot import Robot
 from vgs.sim.rg2 import grasp_moment_capacity
 
@@ -45,10 +44,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     args = ap.parse_args(argv)
 
-    cfg = profile("paper")
-    for item in args.set:  # as the vgs commands read --set
-        key, _, text = item.partition("=")
-        cfg = apply_override(cfg, key, parse_value(text))
+    cfg = config_from_args(argparse.Namespace(profile="paper", set=args.set))  # as vgs does
     runner = EpisodeRunner(cfg)
     cell, cam = runner.cell(cfg.cell.peg)
     cell.reset(np.random.default_rng(args.seed))

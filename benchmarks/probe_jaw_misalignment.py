@@ -35,8 +35,7 @@ import numpy as np
 import vgs.assembly.episode as episode_mod
 from vgs.assembly.episode import EpisodeRunner, offset_policy
 from vgs.assembly.grasp import grasp
-from vgs.cli.options import apply_override, parse_value
-from vgs.config import profile
+from vgs.cli.options import config_from_args
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -46,10 +45,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--episodes", type=int, default=4, help="scenes per angle (seeds 0 ..)")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     args = ap.parse_args(argv)
-    cfg = profile("paper")
-    for item in args.set:  # as the vgs commands read --set
-        key, _, text = item.partition("=")
-        cfg = apply_override(cfg, key, parse_value(text))
+    cfg = config_from_args(argparse.Namespace(profile="paper", set=args.set))  # as vgs does
     runner = EpisodeRunner(cfg)
     yaw_after: list[float] = []
 
