@@ -114,7 +114,7 @@ class AssemblyModule(ContactPhases):
                  hole_clearance: float, time_limit: float | None = None) -> None:
         self.robot = robot
         self.time_limit = time_limit
-        self.start = robot.time
+        self.start = 0.0  # robot time when run() began
         self.cfg = cfg
         self.peg = nominal_peg
         self.hole_xy = np.asarray(nominal_hole_xy, dtype=float)
@@ -156,7 +156,7 @@ class AssemblyModule(ContactPhases):
 
     def run(self, record: EpisodeRecord) -> None:
         """Run all phases, filling ``record`` (times, adjustments, failure reason)."""
-        start = self.start = self.robot.time
+        self.start = self.robot.time
         sequence = (
             ("transport", self.transport),
             ("approach", self.approach),
@@ -191,7 +191,7 @@ class AssemblyModule(ContactPhases):
             record.failure_reason = "peg_lost"
         except SimulationError:
             record.failure_reason = "unstable"
-        record.assembly_time = self.robot.time - start
+        record.assembly_time = self.robot.time - self.start
         record.phase_times.update(self.phase_times)
         record.adjustments = self.adjustments
         record.retries = self.retries

@@ -219,11 +219,12 @@ def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
                 f"{k} {v / 60:.1f} min" for k, v in stages.items())
                 + f" ({sum(stages.values()) / 3600:.2f} h in all).")
         train_cfg = meta.get("config", {}).get("train", {})
-        shortcuts = [text for key, on, text in (
-            ("assemble_baseline", False, "the baseline's training grasps ran without the "
-                                         "assembly (its reward is the grasp's)"),
-            ("stop_at_threshold", True, "VGS's training assemblies stopped at the frozen "
-                                        "reward threshold")) if train_cfg.get(key) is on]
+        shortcuts = []
+        if train_cfg.get("assemble_baseline") is False:
+            shortcuts.append("the baseline's training grasps ran without the assembly (its "
+                             "reward is the grasp's)")
+        if train_cfg.get("stop_at_threshold"):
+            shortcuts.append("VGS's training assemblies stopped at the frozen reward threshold")
         if shortcuts:
             doc.p("Training shortcuts (the same rewards, updates and networks as whole "
                   "episodes; docs/training.md): " + "; ".join(shortcuts) + ". The training "

@@ -261,10 +261,9 @@ class _EpisodeSource:
     """
 
     def __init__(self, cfg: ExperimentConfig, agent: GraspAgent, runner: EpisodeRunner,
-                 rng: np.random.Generator, schedule: int, backend: str = "local",
-                 ray_address: str | None = None,
-                 plan: Callable[[], tuple[bool, float | None]] = lambda: (True, None)
-                 ) -> None:
+                 rng: np.random.Generator, schedule: int, backend: str,
+                 ray_address: str | None,
+                 plan: Callable[[], tuple[bool, float | None]]) -> None:
         self.cfg, self.agent, self.runner, self.rng = cfg, agent, runner, rng
         self.plan = plan
         self.schedule = schedule
