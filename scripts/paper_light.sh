@@ -4,17 +4,25 @@
 # assembly), then VGS's, then 1000 tests per policy and condition, the report, and its
 # publication under docs/results/paper_light_s<SEED>. Every step resumes from the run folder when
 # started again, also after the folder was moved to another machine (docs/training.md, "Runs
-# that move between machines").
+# that move between machines"). A run that cannot finish on this machine moves through git:
+# stop it, `scripts/carry.sh pack runs/paper_light_s<SEED> docs/results/unfinished/
+# paper_light_s<SEED>.tar.gz`, commit that file; on the next machine this script unpacks it
+# and goes on, and deletes it once the run is published (commit the deletion).
 # Usage: scripts/paper_light.sh SEED
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SEED=${1:?usage: scripts/paper_light.sh SEED}
 OUT=runs/paper_light_s$SEED
+CARRY=docs/results/unfinished/paper_light_s$SEED.tar.gz
 VGS=.venv/bin/vgs
 SET=(--profile paper-light --set "reproduce.train_seeds=($SEED,)")
+if [ ! -e "$OUT" ] && [ -f "$CARRY" ]; then
+    scripts/carry.sh unpack "$CARRY" "$OUT"
+fi
 # The baseline alone first: it is short, and a finished run needs no checkpoint to move.
 $VGS train --mode baseline "${SET[@]}" --seed "$SEED" --out "$OUT/train/baseline_s$SEED" \
     --no-progress
 $VGS reproduce "${SET[@]}" --out "$OUT" --no-progress
 $VGS report "$OUT" --title "VGS reproduction report (paper-light, seed $SEED)" \
     --publish "docs/results/paper_light_s$SEED"
+rm -f "$CARRY"

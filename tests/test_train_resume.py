@@ -167,3 +167,49 @@ def test_checkpoints_must_fall_on_batch_ends() -> None:
     with pytest.raises(ConfigError, match="checkpoint_every"):
         override(override(tiny_config(), "train.checkpoint_every", 3),
                  "train.parallel_episodes", 2)
+
+
+@pytest.mark.slow
+def test_a_run_carried_through_git_resumes_and_its_finished_runs_stay_done(
+        tmp_path: Path, monkeypatch, full_run) -> None:
+    """``scripts/carry.sh``: a folder with a finished and an unfinished training run, packed and
+    unpacked elsewhere. The finished run is kept as its final network (no checkpoint) and
+    counts as done; the unfinished one resumes to the uninterrupted run's table."""
+    import subprocess
+    import sys
+
+    import torch
+
+    from vgs.errors import CorruptFileError
+    from vgs.experiments.policies import load_trained_agent
+
+    run = tmp_path / "here" / "repro"
+    shutil.copytree(full_run[0], run / "train" / "done")
+    _killed_at_third_episode(run / "train" / "cut", monkeypatch)
+    script = Path(__file__).resolve().parents[1] / "scripts" / "carry.sh"
+    env = {"PATH": "/usr/bin:/bin", "VGS": str(Path(sys.executable).parent / "vgs")}
+    packed, moved = tmp_path / "carry.tar.gz", tmp_path / "elsewhere" / "repro"
+    for args in (["pack", run, packed], ["unpack", packed, moved]):
+        subprocess.run(["bash", str(script), *map(str, args)], check=True, env=env,
+                       capture_output=True)
+
+    done, cut = moved / "train" / "done", moved / "train" / "cut"
+    assert not (done / "checkpoint.pt").exists() and (done / "policy.pt").exists()
+    assert (cut / "checkpoint.pt").exists() and not list(moved.rglob("tensorboard"))
+    table = (done / "episodes.csv").read_bytes()
+    train_mod.train(tiny_config(), "vgs", done, progress=False)  # nothing left to train
+    assert (done / "episodes.csv").read_bytes() == table
+    with pytest.raises(CorruptFileError, match="no checkpoint.pt to train on"):
+        train_mod.train(override(tiny_config(), "train.episodes", 5), "vgs", done,
+                        progress=False)
+    train_mod.train(tiny_config(), "vgs", cut, progress=False)
+    assert rows(cut) == rows(full_run[0])
+
+    # The kept network is the one the checkpoint held (BatchNorm's update counters, which the
+    # evaluation network does not use, are not exported).
+    _, _, original, n_original = load_trained_agent(full_run[0])
+    _, _, kept, n_kept = load_trained_agent(done)
+    assert n_kept == n_original == 3
+    for name, tensor in original.eva_net.state_dict().items():
+        if not name.endswith("num_batches_tracked"):
+            assert torch.equal(tensor, kept.eva_net.state_dict()[name]), name

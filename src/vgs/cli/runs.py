@@ -133,7 +133,11 @@ def cmd_train(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
                                      "device": "train.device"})
     out = train(cfg, args.mode, Path(args.out), progress=not args.no_progress,
                 backend=args.backend, ray_address=args.ray_address)
-    print(f"run in {out}: episodes.csv, tensorboard/, checkpoint.pt")
+    if (out / "checkpoint.pt").exists():
+        print(f"run in {out}: episodes.csv, tensorboard/, checkpoint.pt")
+    else:
+        print(f"{out} holds a finished run kept as its final network (policy.pt): nothing to "
+              "train")
     return 0
 
 

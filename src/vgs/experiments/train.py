@@ -75,6 +75,7 @@ from vgs.experiments.trainfolder import (
     _sha256,
     check_start,
     episode_seed,
+    finished_as_policy,
     load_checkpoint,
     read_rows,
     save_checkpoint,
@@ -162,6 +163,8 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
     torch.set_num_threads(threads or max(1, min(4, os.cpu_count() or 1)))
     agent = GraspAgent(cfg.network, cfg.agent, device=device, seed=cfg.seed)
     schedule, new_meta = check_start(cfg, mode, out)
+    if finished_as_policy(out, total):
+        return out  # finished, and kept as its final network (scripts/carry.sh)
     runner = EpisodeRunner(cfg)
     replay = ReplayBuffer(cfg.agent.replay_capacity, render=scene_renderer(runner),
                           cache_size=REPLAY_CACHE)

@@ -37,6 +37,32 @@ RECORD_COLUMNS = ("grasp_success", "grasp_offset_mm", "assembly_success", "assem
                   "adjustments", "failure_reason")  # from EpisodeRecord.to_row()
 
 
+def finished_as_policy(out: Path, total: int) -> bool:
+    """Whether ``out`` holds a finished run kept as its final network alone, the way
+    ``scripts/carry.sh`` moves a finished run through git: ``policy.pt`` and ``policy.json``
+    (``vgs export-policy RUN --out RUN``), the table and ``convergence.json``, no checkpoint.
+
+    Raises:
+        CorruptFileError: If that network was trained for fewer than ``total`` episodes (a
+            longer run needs the checkpoint, which such a folder no longer has).
+    """
+    from vgs.experiments.policies import POLICY_DESCRIPTION, POLICY_WEIGHTS
+
+    if (out / "checkpoint.pt").exists() or not (out / POLICY_WEIGHTS).exists():
+        return False
+    desc = out / POLICY_DESCRIPTION
+    trained = read_json(desc).get("trained_episodes") if desc.exists() else None
+    if not isinstance(trained, int) or not (out / "convergence.json").exists():
+        raise CorruptFileError(desc, "is missing or records no trained_episodes, and the folder "
+                                     "holds no checkpoint.pt to train on from")
+    if trained < total:
+        raise CorruptFileError(out / POLICY_WEIGHTS,
+                               f"is the final network of a run of {trained} episodes, and the "
+                               f"folder holds no checkpoint.pt to train on to {total}; train "
+                               "into a new folder")
+    return True
+
+
 def episode_seed(root: int, episode: int) -> int:
     """Seed of one episode from (root seed, episode index)."""
     return int(np.random.SeedSequence([root, episode]).generate_state(1)[0])
