@@ -99,6 +99,23 @@ def test_a_checkpoint_moved_to_another_folder_resumes_to_the_same_table(
 
 
 @pytest.mark.slow
+def test_a_resumed_run_keeps_the_torch_threads_it_started_with(
+        tmp_path: Path, monkeypatch, full_run) -> None:
+    """Another thread count sums in another order; run.json keeps the first, and a resume
+    asking for another still computes the uninterrupted run's table."""
+    import json
+
+    _killed_at_third_episode(tmp_path / "run", monkeypatch)
+    recorded = json.loads((tmp_path / "run" / "run.json").read_text())["torch_threads"]
+    seen: list[int] = []
+    monkeypatch.setattr(train_mod.torch, "set_num_threads", seen.append)
+    train_mod.train(tiny_config(), "vgs", tmp_path / "run", progress=False,
+                    threads=recorded + 1)
+    assert seen == [recorded]
+    assert rows(tmp_path / "run") == rows(full_run[0])
+
+
+@pytest.mark.slow
 def test_re_rendered_replay_heightmaps_equal_the_stored_ones(full_run) -> None:
     from vgs.grasping.agent import GraspAgent
     from vgs.grasping.replay import ReplayBuffer

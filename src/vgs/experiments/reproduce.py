@@ -137,18 +137,18 @@ class Reproduction:
     def _train_unlocked(self) -> None:
         """Stage 1: train (or resume) every run; runs go side by side over the workers."""
         t0 = time.perf_counter()
-        jobs = []
-        parallel = max(1, min(self.workers, len(self.run_dirs())))
+        todo = [run for run in self.run_dirs() if not self._trained(run[2])]
+        # The runs left share the cores (a lone run left, e.g. VGS after the baseline, has
+        # them all for its network's threads).
+        parallel = max(1, min(self.workers, len(todo)))
         threads = max(1, (os.cpu_count() or 1) // parallel)
-        for i, (mode, seed, folder) in enumerate(self.run_dirs()):
-            if self._trained(folder):
-                continue
-            jobs.append((replace(self.cfg, seed=seed), mode, str(folder), self.progress,
-                         threads, i % parallel, self.backend, self.ray_address))
-        if parallel == 1 or len(jobs) <= 1:
+        jobs = [(replace(self.cfg, seed=seed), mode, str(folder), self.progress, threads,
+                 i % parallel, self.backend, self.ray_address)
+                for i, (mode, seed, folder) in enumerate(todo)]
+        if parallel == 1:
             for job in jobs:
                 _train_job(job)
-        elif jobs:
+        else:
             with ProcessPoolExecutor(parallel, mp_context=mp.get_context("spawn"),
                                      initializer=_ignore_sigint) as pool:
                 list(pool.map(_train_job, jobs))

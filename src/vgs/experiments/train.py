@@ -84,7 +84,7 @@ from vgs.grasping.agent import DeltaQMonitor, GraspAction, GraspAgent
 from vgs.grasping.preprocess import peg_mask
 from vgs.grasping.replay import DEFAULT_CACHE, Renderer, ReplayBuffer, Transition
 from vgs.grasping.rewards import MODES, episode_reward, next_threshold
-from vgs.runfolder import locked, write_json
+from vgs.runfolder import locked, read_json, write_json
 from vgs.sim.camera import Heightmap
 from vgs.validate import check_config
 
@@ -127,7 +127,8 @@ def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
         mode: ``vgs`` or ``baseline``.
         out: Run folder.
         progress: Show a progress bar.
-        threads: Torch CPU threads (default: up to 4, at most the number of cores).
+        threads: Torch CPU threads (default: up to 4, at most the number of cores); a
+            resumed run keeps the count its ``run.json`` recorded.
         position: Line of the progress bar (several runs side by side).
         backend: Where the physics of parallel episodes (``train.parallel_episodes`` > 1)
             runs: ``local`` (spawned processes) or ``ray`` (Ray actors,
@@ -160,11 +161,19 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
     # Everything is checked before anything is written: the networks can be built, the request
     # matches run.json, the checkpoint and the table fit.
     total = cfg.train.episodes
-    torch.set_num_threads(threads or max(1, min(4, os.cpu_count() or 1)))
     agent = GraspAgent(cfg.network, cfg.agent, device=device, seed=cfg.seed)
     schedule, new_meta = check_start(cfg, mode, out)
     if finished_as_policy(out, total):
         return out  # finished, and kept as its final network (scripts/carry.sh)
+    # The network's CPU threads belong to the run: another count sums in another order and
+    # the losses part in the 4th digit, so a resumed run keeps the count run.json recorded.
+    meta = new_meta if new_meta is not None else read_json(out / "run.json")
+    recorded = meta.get("torch_threads")
+    n_threads = recorded if isinstance(recorded, int) and recorded >= 1 else (
+        threads or max(1, min(4, os.cpu_count() or 1)))
+    if recorded != n_threads:
+        new_meta = {**meta, "torch_threads": n_threads}
+    torch.set_num_threads(n_threads)
     runner = EpisodeRunner(cfg)
     replay = ReplayBuffer(cfg.agent.replay_capacity, render=scene_renderer(runner),
                           cache_size=REPLAY_CACHE)
