@@ -133,6 +133,32 @@ def load_trained_agent(run_dir: Path, device: str = "cpu", field: str = "policy"
     return run_cfg, meta, agent, _load_policy_files(run_dir, meta, agent, device)
 
 
+def finished_as_policy(out: Path, total: int) -> bool:
+    """Whether ``out`` holds a finished run kept as its final network alone, the way
+    ``scripts/carry.sh`` moves a finished run through git: ``policy.pt`` and ``policy.json``
+    (``vgs export-policy RUN --out RUN``), the table and ``convergence.json``, no checkpoint.
+
+    Raises:
+        CorruptFileError: If that network was trained for fewer than ``total`` episodes (a
+            longer run needs the checkpoint, which such a folder no longer has).
+    """
+    from vgs.runfolder import read_json
+
+    if (out / "checkpoint.pt").exists() or not (out / POLICY_WEIGHTS).exists():
+        return False
+    desc = out / POLICY_DESCRIPTION
+    trained = read_json(desc).get("trained_episodes") if desc.exists() else None
+    if not isinstance(trained, int) or not (out / "convergence.json").exists():
+        raise CorruptFileError(desc, "is missing or records no trained_episodes, and the folder "
+                                     "holds no checkpoint.pt to train on from")
+    if trained < total:
+        raise CorruptFileError(out / POLICY_WEIGHTS,
+                               f"is the final network of a run of {trained} episodes, and the "
+                               f"folder holds no checkpoint.pt to train on to {total}; train "
+                               "into a new folder")
+    return True
+
+
 def _load_policy_files(folder: Path, meta: dict[str, Any], agent: Any, device: str) -> int:
     """Load ``policy.pt`` into the agent's networks (both: the target network is unused when
     acting); return the trained episodes ``policy.json`` records.

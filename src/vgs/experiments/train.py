@@ -47,7 +47,6 @@ their meaning and the extra ones act at the final epsilon. The folder is locked
 from __future__ import annotations
 
 import math
-import os
 import sys
 import time
 from collections.abc import Callable
@@ -61,13 +60,9 @@ from tqdm import tqdm
 from vgs.assembly.episode import EpisodeRunner, GraspCommand
 from vgs.assembly.record import EpisodeRecord
 from vgs.config import ExperimentConfig
-from vgs.errors import (
-    CheckpointError,
-    ConfigError,
-    CorruptFileError,
-)
+from vgs.errors import CheckpointError, ConfigError, CorruptFileError
 from vgs.experiments.episodepool import BACKENDS, GraspTask, TrainingPool
-from vgs.experiments.policies import pixel_command
+from vgs.experiments.policies import finished_as_policy, pixel_command
 from vgs.experiments.trainfolder import (
     RECORD_COLUMNS,
     TrainState,
@@ -75,7 +70,6 @@ from vgs.experiments.trainfolder import (
     _sha256,
     check_start,
     episode_seed,
-    finished_as_policy,
     load_checkpoint,
     read_rows,
     save_checkpoint,
@@ -84,7 +78,7 @@ from vgs.grasping.agent import DeltaQMonitor, GraspAction, GraspAgent
 from vgs.grasping.preprocess import peg_mask
 from vgs.grasping.replay import DEFAULT_CACHE, Renderer, ReplayBuffer, Transition
 from vgs.grasping.rewards import MODES, episode_reward, next_threshold
-from vgs.runfolder import locked, read_json, write_json
+from vgs.runfolder import locked, write_json
 from vgs.sim.camera import Heightmap
 from vgs.validate import check_config
 
@@ -162,18 +156,10 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
     # matches run.json, the checkpoint and the table fit.
     total = cfg.train.episodes
     agent = GraspAgent(cfg.network, cfg.agent, device=device, seed=cfg.seed)
-    schedule, new_meta = check_start(cfg, mode, out)
+    schedule, run_threads, new_meta = check_start(cfg, mode, out, threads)
     if finished_as_policy(out, total):
         return out  # finished, and kept as its final network (scripts/carry.sh)
-    # The network's CPU threads belong to the run: another count sums in another order and
-    # the losses part in the 4th digit, so a resumed run keeps the count run.json recorded.
-    meta = new_meta if new_meta is not None else read_json(out / "run.json")
-    recorded = meta.get("torch_threads")
-    n_threads = recorded if isinstance(recorded, int) and recorded >= 1 else (
-        threads or max(1, min(4, os.cpu_count() or 1)))
-    if recorded != n_threads:
-        new_meta = {**meta, "torch_threads": n_threads}
-    torch.set_num_threads(n_threads)
+    torch.set_num_threads(run_threads)
     runner = EpisodeRunner(cfg)
     replay = ReplayBuffer(cfg.agent.replay_capacity, render=scene_renderer(runner),
                           cache_size=REPLAY_CACHE)

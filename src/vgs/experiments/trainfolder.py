@@ -37,32 +37,6 @@ RECORD_COLUMNS = ("grasp_success", "grasp_offset_mm", "assembly_success", "assem
                   "adjustments", "failure_reason")  # from EpisodeRecord.to_row()
 
 
-def finished_as_policy(out: Path, total: int) -> bool:
-    """Whether ``out`` holds a finished run kept as its final network alone, the way
-    ``scripts/carry.sh`` moves a finished run through git: ``policy.pt`` and ``policy.json``
-    (``vgs export-policy RUN --out RUN``), the table and ``convergence.json``, no checkpoint.
-
-    Raises:
-        CorruptFileError: If that network was trained for fewer than ``total`` episodes (a
-            longer run needs the checkpoint, which such a folder no longer has).
-    """
-    from vgs.experiments.policies import POLICY_DESCRIPTION, POLICY_WEIGHTS
-
-    if (out / "checkpoint.pt").exists() or not (out / POLICY_WEIGHTS).exists():
-        return False
-    desc = out / POLICY_DESCRIPTION
-    trained = read_json(desc).get("trained_episodes") if desc.exists() else None
-    if not isinstance(trained, int) or not (out / "convergence.json").exists():
-        raise CorruptFileError(desc, "is missing or records no trained_episodes, and the folder "
-                                     "holds no checkpoint.pt to train on from")
-    if trained < total:
-        raise CorruptFileError(out / POLICY_WEIGHTS,
-                               f"is the final network of a run of {trained} episodes, and the "
-                               f"folder holds no checkpoint.pt to train on to {total}; train "
-                               "into a new folder")
-    return True
-
-
 def episode_seed(root: int, episode: int) -> int:
     """Seed of one episode from (root seed, episode index)."""
     return int(np.random.SeedSequence([root, episode]).generate_state(1)[0])
@@ -260,16 +234,23 @@ def git_revision() -> str:
         return "unknown"
 
 
-def check_start(cfg: ExperimentConfig, mode: str, out: Path
-                 ) -> tuple[int, dict[str, Any] | None]:
+def check_start(cfg: ExperimentConfig, mode: str, out: Path, threads: int | None = None
+                ) -> tuple[int, int, dict[str, Any] | None]:
     """Check the request against ``run.json`` without writing anything.
 
+    Args:
+        threads: Torch CPU threads asked for (default: up to 4, at most the cores). A run
+            keeps the count it started with (``torch_threads``): another count sums in
+            another order and moves the losses in the 4th digit.
+
     Returns:
-        The number of episodes the epsilon schedule spans, and the ``run.json`` to write once
-        the rest of the folder has been checked (None when it stays as it is).
+        The number of episodes the epsilon schedule spans, the run's torch threads, and the
+        ``run.json`` to write once the rest of the folder has been checked (None when it stays
+        as it is).
     """
     meta_path = out / "run.json"
     here = host()
+    asked = threads or max(1, min(4, os.cpu_count() or 1))
     if meta_path.exists():
         meta = read_json(meta_path)
         if meta.get("mode") != mode:
@@ -280,17 +261,18 @@ def check_start(cfg: ExperimentConfig, mode: str, out: Path
         schedule = int(meta.get("schedule_episodes", meta["config"].get("train", {}).get(
             "episodes", cfg.train.episodes)))
         hosts = meta.get("hosts") if isinstance(meta.get("hosts"), list) else []
-        if not grown and here in hosts:
-            return schedule, None
-        meta.update(config=to_dict(cfg), schedule_episodes=schedule,
+        kept = meta.get("torch_threads")
+        run_threads = kept if isinstance(kept, int) and kept >= 1 else asked
+        if not grown and here in hosts and kept == run_threads:
+            return schedule, run_threads, None
+        meta.update(config=to_dict(cfg), schedule_episodes=schedule, torch_threads=run_threads,
                     hosts=hosts + ([here] if here not in hosts else []))
-        return schedule, meta
+        return schedule, run_threads, meta
     leftovers = [n for n in ("checkpoint.pt", "episodes.csv") if (out / n).exists()]
     if leftovers:
         raise CorruptFileError(meta_path, f"is missing but {out} holds {', '.join(leftovers)}; "
                                           "restore it or train into a new folder")
-    return cfg.train.episodes, {"mode": mode, "config": to_dict(cfg),
-                                "schedule_episodes": cfg.train.episodes,
-                                "git_revision": git_revision(),
-                                "python": sys.version.split()[0], "torch": torch.__version__,
-                                "hosts": [here]}
+    return cfg.train.episodes, asked, {
+        "mode": mode, "config": to_dict(cfg), "schedule_episodes": cfg.train.episodes,
+        "torch_threads": asked, "git_revision": git_revision(),
+        "python": sys.version.split()[0], "torch": torch.__version__, "hosts": [here]}
