@@ -185,3 +185,15 @@ def test_a_published_reproduction_commits_its_final_networks(
     a, b = (pd.read_parquet(tmp_path / e / "episodes.parquet").drop(columns="wall_s")
             for e in "ab")
     pd.testing.assert_frame_equal(a, b)
+
+    # A finished run kept as its final network alone (scripts/carry.sh) publishes the same.
+    import torch
+
+    kept = repro / "train" / "baseline_s0"
+    assert main(["export-policy", str(kept), "--out", str(kept)]) == 0
+    (kept / "checkpoint.pt").unlink()
+    assert main(["report", str(repro), "--publish", str(tmp_path / "pub2")]) == 0
+    assert "with the final networks of 2 runs" in capsys.readouterr().out
+    w1, w2 = (torch.load(d / "baseline" / "policy.pt", weights_only=True)
+              for d in (pub, tmp_path / "pub2"))
+    assert w1.keys() == w2.keys() and all(torch.equal(w1[k], w2[k]) for k in w1)

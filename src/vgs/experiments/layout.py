@@ -76,6 +76,12 @@ def train_folders(out: Path) -> list[Path]:
     return sorted((out / "train").glob("*"))
 
 
+def holds_network(run: Path) -> bool:
+    """Whether a training-run folder holds its network: ``checkpoint.pt``, or ``policy.pt``
+    alone when a finished run was kept as its final network (``scripts/carry.sh``)."""
+    return (run / "checkpoint.pt").exists() or (run / "policy.pt").exists()
+
+
 def eval_tables(out: Path) -> list[Path]:
     """The merged evaluation tables found in ``out``, sorted:
     ``DIR/eval/<label>/<condition>/episodes.parquet``."""

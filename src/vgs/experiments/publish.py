@@ -8,7 +8,7 @@ import warnings
 from pathlib import Path
 
 from vgs.errors import ConfigError
-from vgs.experiments.layout import train_folders
+from vgs.experiments.layout import holds_network, train_folders
 from vgs.runfolder import read_json
 
 PUBLISH_POLICY_LIMIT = 10_000_000  # bytes: final networks a published run commits (light backbone)
@@ -47,7 +47,7 @@ def publish(out: Path, dest: Path) -> list[Path]:
                 shutil.copy2(src, target)
                 copied.append(target)
     finished = [run for run in train_folders(out)
-                if (run / "checkpoint.pt").exists() and (run / "convergence.json").exists()]
+                if holds_network(run) and (run / "convergence.json").exists()]
     if finished:
         from vgs.experiments.export_policy import export_policy
 

@@ -35,7 +35,7 @@ from vgs.checkpoint import atomic_write_text  # noqa: E402
 from vgs.config import CONDITIONS  # noqa: E402
 from vgs.errors import ConfigError  # noqa: E402
 from vgs.experiments.evaluate import summarize  # noqa: E402
-from vgs.experiments.layout import eval_tables, train_folders  # noqa: E402
+from vgs.experiments.layout import eval_tables, holds_network, train_folders  # noqa: E402
 from vgs.experiments.reportdoc import Doc  # noqa: E402
 from vgs.experiments.reportfigures import (  # noqa: E402
     CONDITION_TITLES,
@@ -330,7 +330,7 @@ def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
         from vgs.experiments.heatmap import plot_heatmaps
 
         for run in runs:
-            if (run / "checkpoint.pt").exists():
+            if holds_network(run):
                 fig = plot_heatmaps(run, figures / f"heatmap_{run.name}.png", scenes=1)
                 doc.img(fig, f"Q heat maps of {run.name}, untrained beside trained "
                              "(paper Fig. 7)")
