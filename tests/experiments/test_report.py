@@ -114,3 +114,32 @@ def test_too_few_successes_give_no_interval() -> None:
     ok[:2] = True
     gain = efficiency_gain(_table("baseline", t, success=ok), _table("vgs", 0.5 * t))
     assert np.isnan(gain.low) and "too few successes" in gain.text()
+
+
+def test_report_states_each_training_runs_own_wall_time(tmp_path: Path) -> None:
+    """The runs' tables count what reproduce.json cannot: a run trained outside ``vgs
+    reproduce`` (scripts/paper_light.sh's baseline), interrupted or moved between machines."""
+    import json
+
+    from vgs.experiments.trainfolder import CSV_COLUMNS
+
+    run = tmp_path / "run"
+    shutil.copytree(DATA, run)
+    (run / "reproduce.json").write_text(json.dumps(
+        {"profile": "paper-light", "stage_wall_s": {"train": 1800.0, "evaluate": 5400.0}}))
+    for mode, wall in (("baseline", 0.6), ("vgs", 1.8)):
+        rows = [{c: "" for c in CSV_COLUMNS} | {
+            "episode": i, "mode": mode, "seed": i, "epsilon": 0.5, "explored": "True",
+            "rotation": 0, "row": 1, "col": 1, "grasp_success": "True",
+            "grasp_offset_mm": 5.0, "assembly_success": "False", "adjustments": 0,
+            "r_grasp": 0.3, "r_assembly": 0.0, "reward": 0.3, "loss": 0.1, "delta_q": 0.1,
+            "wall_s": wall} for i in range(3000)]
+        folder = run / "train" / f"{mode}_s0"
+        folder.mkdir(parents=True)
+        (folder / "run.json").write_text(json.dumps(
+            {"mode": mode, "config": {"agent": {"random_episodes": 1000}}}))
+        pd.DataFrame(rows, columns=list(CSV_COLUMNS)).to_csv(folder / "episodes.csv",
+                                                             index=False)
+    text = build_report(run).read_text()
+    assert "train 30.0 min, evaluate 90.0 min (2.00 h in all)" in text
+    assert "baseline_s0 0.50 h, vgs_s0 1.50 h" in text

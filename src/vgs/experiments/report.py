@@ -218,6 +218,13 @@ def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
             doc.p("Wall time per stage: " + ", ".join(
                 f"{k} {v / 60:.1f} min" for k, v in stages.items())
                 + f" ({sum(stages.values()) / 3600:.2f} h in all).")
+        own = {run.name: read_table(run / "episodes.csv")["wall_s"].sum() / 3600.0
+               for run in train_folders(out) if (run / "episodes.csv").exists()}
+        if own:
+            doc.p("Each training run's own wall time, the sum of its table's `wall_s` (it "
+                  "counts a run trained outside `vgs reproduce`, interrupted or moved between "
+                  "machines; runs trained side by side overlap): " + ", ".join(
+                      f"{name} {h:.2f} h" for name, h in own.items()) + ".")
         train_cfg = meta.get("config", {}).get("train", {})
         shortcuts = []
         if train_cfg.get("assemble_baseline") is False:
