@@ -56,13 +56,15 @@ def heightmap(size: int) -> tuple[np.ndarray, np.ndarray]:
     return color, depth + rng.uniform(0, 0.002, depth.shape).astype(np.float32)
 
 
-@pytest.mark.parametrize(("backbone", "size", "rotations"),
-                         [("light", 224, 4),
-                          pytest.param("densenet121", 64, 2, marks=pytest.mark.slow)])
+@pytest.mark.parametrize(("backbone", "size", "rotations", "rotate"),
+                         [("light", 224, 4, "input"), ("light", 224, 16, "features"),
+                          pytest.param("densenet121", 64, 2, "input", marks=pytest.mark.slow)])
 def test_documented_snippet_reproduces_q(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
-                                         backbone: str, size: int, rotations: int) -> None:
+                                         backbone: str, size: int, rotations: int,
+                                         rotate: str) -> None:
     cfg = override(profile("smoke"), "network.backbone", backbone)
     cfg = override(cfg, "network.num_rotations", rotations)
+    cfg = override(cfg, "network.rotate", rotate)
     cfg = override(cfg, "cell.camera.size", size)
     agent = fake_run(tmp_path / "run", cfg)
     written = export_policy(tmp_path / "run", tmp_path / "policy.pt")
@@ -71,6 +73,7 @@ def test_documented_snippet_reproduces_q(tmp_path: Path, monkeypatch: pytest.Mon
     assert all(isinstance(t, torch.Tensor) for t in weights.values())
     description = json.loads(written.description.read_text())
     assert description["num_rotations"] == rotations and description["trained_episodes"] == 7
+    assert description["rotate"] == rotate
     color, depth = heightmap(size)
     expected = agent.q_values(color, depth)
     monkeypatch.chdir(tmp_path)  # the snippet opens policy.pt and policy.json

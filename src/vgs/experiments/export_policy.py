@@ -17,6 +17,8 @@
   ``["maxpool", name, k, s, p]``        ``F.max_pool2d(x, k, s, p)``
   ``["avgpool", name, k, s]``           ``F.avg_pool2d(x, k, s)``
   ``["dense", name, layers]``           ``x = cat(x, run(x, layers))`` (a DenseNet layer)
+  ``["angle", name, 4]``                ``x = cat(x, e_k)``, the angle code as constant
+                                        channels (``rotate = "features"`` only)
   ====================================  ==================================================
 
 ``vgs export-policy RUN --out FOLDER`` (a path without a file suffix) writes a **policy folder**:
@@ -101,6 +103,9 @@ def describe(net: GraspQNetwork, size: int, pixel_size: float,
              extra: dict[str, Any]) -> dict[str, Any]:
     """The JSON description of ``net`` for H = W = ``size`` heightmaps."""
     cfg = net.cfg
+    head = layer_ops(net.head, "head")
+    if net.rotate == "features":  # the angle code joins the features after the first BN-ReLU
+        head.insert(2, ["angle", "head", net.head.angle_channels])
     return {
         "format": FORMAT,
         **extra,
@@ -118,12 +123,16 @@ def describe(net: GraspQNetwork, size: int, pixel_size: float,
         "padded_size": padded_size(size, size),
         "rotation": "theta_k = 2 pi k / R; images turn by theta_k about their centre with "
                     "affine_grid [[cos, -sin, 0], [sin, cos, 0]] and bilinear grid_sample "
-                    "(align_corners=False, zeros outside); Q maps turn back by -theta_k",
+                    "(align_corners=False, zeros outside); Q maps turn back by -theta_k"
+        if net.rotate == "input" else
+        "theta_k = 2 pi k / R; nothing turns: the trunks see the unrotated input once, and "
+        "the head's 'angle' op appends (cos theta_k, sin theta_k, cos 2 theta_k, "
+        "sin 2 theta_k) as constant channels",
         "output": "Q (R, H, W): Q[k, i, j] is the value of closing the jaws at pixel (i, j) "
                   "along (d_col, d_row) = (cos theta_k, sin theta_k)",
         "color_trunk": layer_ops(net.color_trunk, "color_trunk"),
         "depth_trunk": layer_ops(net.depth_trunk, "depth_trunk"),
-        "head": layer_ops(net.head, "head"),
+        "head": head,
         "upsample": "bilinear to padded_size (align_corners=False), then crop the H x W window "
                     "at ((P - H) // 2, (P - W) // 2)",
     }
@@ -144,8 +153,7 @@ def export_policy(run_dir: Path, out: Path) -> PolicyExport:
     Raises:
         ConfigError: ``out`` on another suffix or a folder holding files but not this run's
             ``run.json``,
-            ``policy`` if the folder holds no run or the network rotates features (not
-            described).
+            ``policy`` if the folder holds no run.
     """
     from vgs.runfolder import read_json
 
@@ -165,9 +173,6 @@ def export_policy(run_dir: Path, out: Path) -> PolicyExport:
             raise ConfigError("out", f"{folder} holds files and no run.json of this run; use a "
                                      "new folder")
     net: GraspQNetwork = agent.eva_net
-    if net.rotate != "input":
-        raise ConfigError("policy", f"{run_dir} rotates {net.rotate}; export-policy describes "
-                                    "networks with input rotation (the paper's) only")
     weights = {name: t.detach().to("cpu", torch.float32).contiguous()
                for name, t in net.state_dict().items() if not name.endswith("num_batches_tracked")}
     camera = cfg.cell.camera
