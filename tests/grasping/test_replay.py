@@ -8,7 +8,13 @@ import numpy as np
 import pytest
 
 from vgs.errors import ConfigError
-from vgs.grasping.replay import ReplayBuffer, Transition
+from vgs.grasping.replay import (
+    CACHE_BYTES,
+    DEFAULT_CACHE,
+    ReplayBuffer,
+    Transition,
+    cache_size_for,
+)
 
 
 def _transition(i: int, reward: float = 0.0, with_next: bool = False) -> Transition:
@@ -181,3 +187,18 @@ def test_a_scene_buffer_refuses_what_it_cannot_re_render() -> None:
         maps.maps(3)
     with pytest.raises(ConfigError):
         ReplayBuffer(4, render=Scenes(), cache_size=-1)
+
+
+def test_training_caches_a_whole_paper_light_buffer_within_its_memory_budget() -> None:
+    """The cache's size only trades memory for renders (replays return the same maps)."""
+    per_map = 3 * 224 * 224 + 4 * 224 * 224  # uint8 colour, float32 depth: 351 kB
+    assert cache_size_for(5000, 224) == 5000  # 1.76 GB, inside the 2 GiB budget
+    assert cache_size_for(20_000, 224) == CACHE_BYTES // per_map < 20_000
+    assert cache_size_for(5000, 224, budget=0) == DEFAULT_CACHE
+    render = Scenes()
+    buf = ReplayBuffer(6, render=render, cache_size=cache_size_for(6, 5))
+    for s in range(6):
+        buf.add(_scene_transition(s), 0.1)
+    for j in range(6):
+        buf.get(j)
+    assert render.calls == [] and buf.cache_hits == 6

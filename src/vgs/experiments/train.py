@@ -76,13 +76,13 @@ from vgs.experiments.trainfolder import (
 )
 from vgs.grasping.agent import DeltaQMonitor, GraspAction, GraspAgent
 from vgs.grasping.preprocess import peg_mask
-from vgs.grasping.replay import DEFAULT_CACHE, Renderer, ReplayBuffer, Transition
+from vgs.grasping.replay import Renderer, ReplayBuffer, Transition, cache_size_for
 from vgs.grasping.rewards import MODES, episode_reward, next_threshold
 from vgs.runfolder import locked, write_json
 from vgs.sim.camera import Heightmap
 from vgs.validate import check_config
 
-REPLAY_CACHE = DEFAULT_CACHE  # re-rendered replay heightmaps kept in memory
+REPLAY_CACHE: int | None = None  # replay maps kept in memory (None: replay.cache_size_for)
 
 
 def scene_renderer(runner: EpisodeRunner) -> Renderer:
@@ -161,8 +161,10 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
         return out  # finished, and kept as its final network (scripts/carry.sh)
     torch.set_num_threads(run_threads)
     runner = EpisodeRunner(cfg)
+    cache = (cache_size_for(cfg.agent.replay_capacity, cfg.cell.camera.size)
+             if REPLAY_CACHE is None else REPLAY_CACHE)
     replay = ReplayBuffer(cfg.agent.replay_capacity, render=scene_renderer(runner),
-                          cache_size=REPLAY_CACHE)
+                          cache_size=cache)
     monitor = DeltaQMonitor.from_config(cfg.agent)
     state = TrainState(exploration_times=[])
     rng = np.random.default_rng([cfg.seed, 7])

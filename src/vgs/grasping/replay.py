@@ -51,8 +51,21 @@ Renderer = Callable[[int], tuple[np.ndarray, np.ndarray]]
 """``render(scene) -> (color, depth)``: the heightmaps of a scene seed, bit-identical each time."""
 
 DEFAULT_CACHE = 32  # re-rendered maps kept by a scene-keyed buffer (11 MB at 224 x 224)
+CACHE_BYTES = 2 * 1024**3  # memory a training run may spend on cached maps (cache_size_for)
 
 
+def cache_size_for(capacity: int, pixels: int, budget: int = CACHE_BYTES) -> int:
+    """Maps a scene-keyed buffer of ``capacity`` transitions keeps in memory: all of them when
+    they fit in ``budget`` bytes, else as many as fit (at least :data:`DEFAULT_CACHE`).
+
+    A ``pixels`` x ``pixels`` map takes ``7 pixels^2`` bytes (uint8 colour, float32 depth):
+    351 kB at 224, so a 5000-transition buffer fits in 1.76 GB. Transitions enter the cache when
+    they are added, so a cache that holds the whole buffer never renders in one process (a
+    resumed one renders each map once, on its first replay); replays return the same maps
+    either way, so the size changes time and memory, never a result.
+    """
+    per_map = 7 * pixels * pixels
+    return max(DEFAULT_CACHE, min(int(capacity), int(budget) // per_map))
 
 
 class ReplayBuffer:
