@@ -2,7 +2,7 @@
 # Move an unfinished run folder (a reproduction, a training run) between machines through git
 # (issue 18; docs/training.md, "Runs that move between machines").
 #
-#   scripts/carry.sh pack RUN FILE     RUN's resumable state as one compressed file
+#   scripts/carry.sh pack RUN FILE     RUN's resumable state as one file (tar, xz)
 #   scripts/carry.sh unpack FILE RUN   lay it out again as RUN (which must not exist)
 #
 # pack keeps every file of RUN but TensorBoard logs, locks and temporary files, and for each
@@ -39,7 +39,7 @@ pack)
         fi
     done < <(find "$RUN" -name checkpoint.pt | sort)
     mkdir -p "$(dirname "$FILE")"
-    tar -C "$TMP" -czf "$FILE.tmp" "$NAME"
+    tar -C "$TMP" -cf - "$NAME" | xz -9e > "$FILE.tmp"  # xz: the tables pack 10 % smaller
     mv "$FILE.tmp" "$FILE"
     echo "carry: $FILE ($(du -h "$FILE" | cut -f1)); commit it, and unpack it on the next machine"
     ;;
@@ -53,7 +53,7 @@ unpack)
     fi
     mkdir -p "$(dirname "$RUN")"
     TMP=$(mktemp -d "$(dirname "$RUN")/.carry.XXXXXX")
-    tar -C "$TMP" -xzf "$FILE"
+    tar -C "$TMP" -xf "$FILE"  # xz, or the gzip of files packed before
     mv "$TMP"/* "$RUN"  # the one folder pack wrote
     rmdir "$TMP"
     echo "carry: $FILE unpacked as $RUN"

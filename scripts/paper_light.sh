@@ -6,14 +6,14 @@
 # started again, also after the folder was moved to another machine (docs/training.md, "Runs
 # that move between machines"). A run that cannot finish on this machine moves through git:
 # stop it, `scripts/carry.sh pack runs/paper_light_s<SEED> docs/results/unfinished/
-# paper_light_s<SEED>.tar.gz`, commit that file; on the next machine this script unpacks it
+# paper_light_s<SEED>.tar.xz`, commit that file; on the next machine this script unpacks it
 # and goes on, and deletes it once the run is published (commit the deletion).
 # Usage: scripts/paper_light.sh SEED
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SEED=${1:?usage: scripts/paper_light.sh SEED}
 OUT=runs/paper_light_s$SEED
-CARRY=docs/results/unfinished/paper_light_s$SEED.tar.gz
+CARRY=docs/results/unfinished/paper_light_s$SEED.tar.xz
 VGS=.venv/bin/vgs
 SET=(--profile paper-light --set "reproduce.train_seeds=($SEED,)")
 if [ ! -e "$OUT" ] && [ -f "$CARRY" ]; then

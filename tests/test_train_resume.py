@@ -205,7 +205,7 @@ def test_a_run_carried_through_git_resumes_and_its_finished_runs_stay_done(
     _killed_at_third_episode(run / "train" / "cut", monkeypatch)
     script = Path(__file__).resolve().parents[1] / "scripts" / "carry.sh"
     env = {"PATH": "/usr/bin:/bin", "VGS": str(Path(sys.executable).parent / "vgs")}
-    packed, moved = tmp_path / "carry.tar.gz", tmp_path / "elsewhere" / "repro"
+    packed, moved = tmp_path / "carry.tar.xz", tmp_path / "elsewhere" / "repro"
     for args in (["pack", run, packed], ["unpack", packed, moved]):
         subprocess.run(["bash", str(script), *map(str, args)], check=True, env=env,
                        capture_output=True)
