@@ -5,7 +5,7 @@ An analysis probe of an evaluation's journal; figures only.
 For each test episode of an evaluation folder (``journal.jsonl``; a finished one or one still
 running), the scene is reset from the episode's seed (as :meth:`EpisodeRunner.run` does) and
 the peg's yaw read from the simulator (ground truth, for analysis only); the pads' long side
-lies along ``theta_k - pi / 2`` for the executed rotation k (``pixel_command``). The jaw
+lies along ``pads_heading(theta_k)`` for the executed rotation k (as ``pixel_command``). The jaw
 misalignment is the angle between the two, folded into [0, 90] deg (the grasp is symmetric
 under a half turn). With R rotations a policy can always come within ``180 / R`` deg (11.25 at
 R = 16). Printed per misalignment bin and per folder: episodes, grasps held, assemblies.
@@ -19,7 +19,6 @@ scene's peg pose does not depend on its mass, but other lengths are other cells)
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from pathlib import Path
 
@@ -28,6 +27,8 @@ import pandas as pd
 
 from vgs.assembly.episode import EpisodeRunner
 from vgs.config import profile
+from vgs.experiments.journal import read_journal
+from vgs.experiments.policies import pads_heading
 from vgs.grasping.actions import rotation_angle
 
 BINS = [0.0, 2.0, 4.0, 6.0, 8.0, 11.25, 90.0]
@@ -35,9 +36,8 @@ BINS = [0.0, 2.0, 4.0, 6.0, 8.0, 11.25, 90.0]
 
 def misalignments(folder: Path, runner: EpisodeRunner, rotations: int) -> pd.DataFrame:
     """One row per journal episode: misalignment [deg], grasp held, assembled."""
-    rows = [json.loads(line) for line in (folder / "journal.jsonl").read_text().splitlines()
-            if line.strip()]
-    rows = [r for r in rows if "seed" in r and "rotation" in r]
+    journal, _ = read_journal(folder / "journal.jsonl")
+    rows = [r for r in journal.values() if "rotation" in r]
     if not rows:
         raise SystemExit(f"{folder}: no test episodes with a rotation in journal.jsonl")
     cfg = runner.cfg
@@ -47,7 +47,7 @@ def misalignments(folder: Path, runner: EpisodeRunner, rotations: int) -> pd.Dat
         cell.reset(np.random.default_rng(int(r["seed"])))
         _, R_world_peg = cell.peg_pose()
         peg_yaw = math.atan2(R_world_peg[1, 2], R_world_peg[0, 2])
-        pads_yaw = rotation_angle(int(r["rotation"]), rotations) - math.pi / 2
+        pads_yaw = pads_heading(rotation_angle(int(r["rotation"]), rotations))
         folded = (math.degrees(pads_yaw - peg_yaw) + 90.0) % 180.0 - 90.0
         out.append({"misalignment_deg": abs(folded), "held": bool(r["grasp_success"]),
                     "assembled": bool(r["assembly_success"])})

@@ -59,14 +59,18 @@ class EvalPolicy(Protocol):
     def __call__(self, hm: Heightmap, rng: np.random.Generator) -> Decision: ...
 
 
-def pixel_command(hm: Heightmap, row: int, col: int, angle: float) -> GraspCommand:
-    """World grasp of pixel (row, col) closing along ``(cos angle, sin angle)``.
+def pads_heading(angle: float) -> float:
+    """World heading of the pads' long side [rad] for jaws closing along
+    ``(cos angle, sin angle)`` in (column, row) pixel axes, which are world (x, y): the grasp
+    primitive's yaw, perpendicular to the closing direction."""
+    return angle - math.pi / 2
 
-    The closing direction is expressed in (column, row) pixel axes, which are world (x, y); the
-    grasp primitive takes the heading of the pads' long side, perpendicular to it.
-    """
+
+def pixel_command(hm: Heightmap, row: int, col: int, angle: float) -> GraspCommand:
+    """World grasp of pixel (row, col) closing along ``(cos angle, sin angle)``
+    (:func:`pads_heading`)."""
     x, y = hm.pixel_to_world(row, col)
-    return GraspCommand(float(x), float(y), float(angle - math.pi / 2))
+    return GraspCommand(float(x), float(y), float(pads_heading(angle)))
 
 
 @dataclass
