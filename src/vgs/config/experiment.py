@@ -135,15 +135,16 @@ def _medium() -> ExperimentConfig:
 
 def _paper_light() -> ExperimentConfig:
     # The paper's protocol (5000 grasps per policy, the first 1000 random, R = 16, 1000 tests
-    # per policy and condition) sized for a 2-core CPU (issue 18): the light backbone with its
-    # rotations applied to the trunk's features (one trunk pass per decision instead of R), the
-    # baseline's training grasps without the assembly its reward does not use, VGS's training
+    # per policy and condition) sized for a 2-core CPU (issue 18): the light backbone, its
+    # heightmaps rotated R times before the trunks as in the paper and VPG (rotate="features",
+    # one trunk pass per decision, did not learn the jaw angle: benchmarks/
+    # probe_offline_rotate.py, docs/training.md), the baseline's training grasps without the assembly its reward does not use, VGS's training
     # assemblies stopped at the frozen reward threshold (the same rewards either way), two
     # parallel training episodes per run, and the reference policy and the sweep left to their
     # own commands (`vgs evaluate --policy center`, `vgs sweep`).
     return ExperimentConfig(
         name="paper-light",
-        network=NetworkConfig(backbone="light", num_rotations=16, rotate="features"),
+        network=NetworkConfig(backbone="light", num_rotations=16),
         train=TrainConfig(parallel_episodes=2, assemble_baseline=False,
                           stop_at_threshold=True),
         reproduce=ReproduceConfig(reference_policies=(), sweep_offsets=0),

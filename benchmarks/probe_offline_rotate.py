@@ -1,0 +1,113 @@
+"""Can the network learn the jaw angle from a training run's own data? (issue 18: seed 0's
+learned `paper-light` policies close their jaws a median 29-40 deg off the peg's axis.)
+An offline analysis probe; figures only, nothing in vgs depends on it.
+
+Fresh networks, one per ``--rotate`` mode (``input``: the heightmaps are turned R times before
+the trunks, as in VPG and the paper; ``features``: one trunk pass and an angle-coded head, the
+`paper-light` profile's mode), are fitted to the same logged transitions of a finished training
+run (``episodes.csv``: scene seed, executed rotation and pixel, reward), in the same random
+order, with the agent's own SGD step (:meth:`GraspAgent.update`, target y = R). The heightmaps
+are re-rendered from the scene seeds as the replay does. Each network then chooses greedily
+(masked to the peg, as in the tests) on held-out test scenes, and the probe prints how far its
+jaws lie from the peg's true axis (ground truth, analysis only; as
+``probe_policy_jaw_angle.py``), beside the run's own final network.
+
+Run: ``.venv/bin/python benchmarks/probe_offline_rotate.py runs/paper_light_s0/train/vgs_s0
+--steps 6000 --test-seeds 100``
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import torch
+from tqdm import tqdm
+
+from vgs.assembly.episode import EpisodeRunner
+from vgs.config import profile
+from vgs.experiments.policies import load_trained_agent, pads_heading
+from vgs.grasping.actions import rotation_angle
+from vgs.grasping.agent import GraspAgent
+from vgs.grasping.preprocess import peg_mask
+from vgs.grasping.transition import Transition
+
+
+def misalignment_deg(runner: EpisodeRunner, seed: int, rotation: int, rotations: int) -> float:
+    """Angle [deg] in [0, 90] between the pads' long side and the peg's true axis."""
+    cell, _ = runner.cell(runner.cfg.cell.peg)
+    cell.reset(np.random.default_rng(seed))
+    _, R_world_peg = cell.peg_pose()
+    peg_yaw = math.atan2(R_world_peg[1, 2], R_world_peg[0, 2])
+    pads_yaw = pads_heading(rotation_angle(rotation, rotations))
+    return abs((math.degrees(pads_yaw - peg_yaw) + 90.0) % 180.0 - 90.0)
+
+
+def greedy_misalignments(agent: GraspAgent, runner: EpisodeRunner, maps: dict[int, tuple],
+                         seeds: list[int]) -> np.ndarray:
+    rng = np.random.default_rng(0)
+    out = []
+    for seed in seeds:
+        color, depth = maps[seed]
+        action = agent.act(color, depth, 0.0, peg_mask(depth), rng)
+        out.append(misalignment_deg(runner, seed, action.rotation, agent.num_rotations))
+    return np.asarray(out)
+
+
+def summary(name: str, m: np.ndarray, rotations: int, seconds: float) -> str:
+    within = float(np.mean(m <= 180.0 / rotations))
+    return (f"{name:<28} median {np.median(m):5.1f} deg, mean {np.mean(m):5.1f} deg, "
+            f"{within:4.0%} within {180 / rotations:.2f} deg  ({seconds:.0f} s)")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("run", type=Path, help="a finished training run folder")
+    parser.add_argument("--profile", default="paper-light")
+    parser.add_argument("--rotate", nargs="+", default=["input", "features"])
+    parser.add_argument("--transitions", type=int, default=5000,
+                        help="the run's first N episodes are the data")
+    parser.add_argument("--steps", type=int, default=6000, help="SGD steps per network")
+    parser.add_argument("--test-seeds", type=int, default=100)
+    parser.add_argument("--net-seed", type=int, default=0)
+    args = parser.parse_args()
+    torch.set_num_threads(2)
+    cfg = profile(args.profile)
+    rotations = cfg.network.num_rotations
+    runner = EpisodeRunner(cfg)
+    table = pd.read_csv(args.run / "episodes.csv").head(args.transitions)
+    seeds = [int(s) for s in table.seed]
+    test_seeds = [10_000_000 + i for i in range(args.test_seeds)]
+    maps: dict[int, tuple] = {}
+    for s in tqdm(seeds + test_seeds, desc="render", mininterval=10):
+        hm = runner.observe(s)
+        maps[s] = (hm.color, hm.depth)
+    table["mis"] = [misalignment_deg(runner, int(s), int(k), rotations)
+                    for s, k in zip(table.seed, table.rotation, strict=True)]
+    near = table.mis <= 180 / rotations
+    print(f"{args.run}: {len(table)} transitions, mean reward {table.reward.mean():.3f}; "
+          f"jaws within {180 / rotations:.2f} deg: {near.mean():.0%} of them, mean reward "
+          f"{table.reward[near].mean():.3f}, beyond: {table.reward[~near].mean():.3f}")
+    order = np.random.default_rng(args.net_seed).integers(len(table), size=args.steps)
+    for mode in args.rotate:
+        agent = GraspAgent(cfg.network, cfg.agent, seed=args.net_seed, rotate=mode)
+        t0 = time.perf_counter()
+        for n in tqdm(order, desc=f"fit {mode}", mininterval=10):
+            row = table.iloc[int(n)]
+            color, depth = maps[int(row.seed)]
+            agent.update(Transition(color, depth, (int(row.rotation), int(row.row),
+                                                   int(row.col)), float(row.reward), done=True))
+        fit = time.perf_counter() - t0
+        m = greedy_misalignments(agent, runner, maps, test_seeds)
+        print(summary(f"rotate={mode}, {args.steps} steps", m, rotations, fit), flush=True)
+    _, _, agent, episodes = load_trained_agent(args.run)
+    m = greedy_misalignments(agent, runner, maps, test_seeds)
+    print(summary(f"the run's own, {episodes} episodes", m, rotations, 0.0))
+
+
+if __name__ == "__main__":
+    main()
