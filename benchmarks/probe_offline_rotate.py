@@ -12,8 +12,8 @@ are re-rendered from the scene seeds as the replay does. Each network then choos
 jaws lie from the peg's true axis (ground truth, analysis only; as
 ``probe_policy_jaw_angle.py``), beside the run's own final network.
 
-Run: ``.venv/bin/python benchmarks/probe_offline_rotate.py runs/paper_light_s0/train/vgs_s0
---steps 6000 --test-seeds 100``
+Run: ``.venv/bin/python benchmarks/probe_offline_rotate.py runs/paper_light_features_s0/train/vgs_s0
+--steps 5000 --test-seeds 200`` (what docs/training.md reports)
 """
 
 from __future__ import annotations
