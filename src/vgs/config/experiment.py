@@ -138,10 +138,11 @@ def _paper_light() -> ExperimentConfig:
     # per policy and condition) sized for a 2-core CPU (issue 18): the light backbone, its
     # heightmaps rotated R times before the trunks as in the paper and VPG (rotate="features",
     # one trunk pass per decision, did not learn the jaw angle: benchmarks/
-    # probe_offline_rotate.py, docs/training.md), the baseline's training grasps without the assembly its reward does not use, VGS's training
-    # assemblies stopped at the frozen reward threshold (the same rewards either way), two
-    # parallel training episodes per run, and the reference policy and the sweep left to their
-    # own commands (`vgs evaluate --policy center`, `vgs sweep`).
+    # probe_offline_rotate.py, docs/training.md), the baseline's training grasps without the
+    # assembly its reward does not use, VGS's training assemblies stopped at the frozen reward
+    # threshold (the same rewards either way), two parallel training episodes per run, and the
+    # reference policy and the sweep left to their own commands (`vgs evaluate --policy
+    # center`, `vgs sweep`).
     return ExperimentConfig(
         name="paper-light",
         network=NetworkConfig(backbone="light", num_rotations=16),
