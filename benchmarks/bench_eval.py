@@ -13,7 +13,7 @@ Prints
   local Ray instance included, and without it);
 * the wall time of ``vgs reproduce --profile quick`` (``--quick`` runs it in a subprocess;
   ``--quick-dir`` reads the stage times of a finished run) (target: 15 minutes);
-* the ``paper-light`` protocol (issue 18: light backbone, R = 16, features rotation, the
+* the ``paper-light`` protocol (issue 18: light backbone, R = 16, input rotation, the
   baseline's training grasps without assembly, VGS's training assemblies stopped at the
   threshold, 1000 tests per learned policy and condition) projected from parts measured here in
   CPU seconds of one process: a whole episode, the same stopped at the median of their assembly
