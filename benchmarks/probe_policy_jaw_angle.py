@@ -3,12 +3,14 @@ assemblies (issue 18: why learned `paper-light` policies assemble a fraction of 
 An analysis probe of an evaluation's journal; figures only.
 
 For each test episode of an evaluation folder (``journal.jsonl``; a finished one or one still
-running), the scene is reset from the episode's seed (as :meth:`EpisodeRunner.run` does) and
-the peg's yaw read from the simulator (ground truth, for analysis only); the pads' long side
-lies along ``pads_heading(theta_k)`` for the executed rotation k (as ``pixel_command``). The jaw
-misalignment is the angle between the two, folded into [0, 90] deg (the grasp is symmetric
-under a half turn). With R rotations a policy can always come within ``180 / R`` deg (11.25 at
-R = 16). Printed per misalignment bin and per folder: episodes, grasps held, assemblies.
+running), or each greedy episode of a training run (``episodes.csv``, ``--last N`` for the
+latest; a baseline trained without assembly has none assembled), the scene is reset from the
+episode's seed (as :meth:`EpisodeRunner.run` does) and the peg's yaw read from the simulator
+(ground truth, for analysis only); the pads' long side lies along ``pads_heading(theta_k)``
+for the executed rotation k (as ``pixel_command``). The jaw misalignment is the angle between
+the two, folded into [0, 90] deg (the grasp is symmetric under a half turn). With R rotations a
+policy can always come within ``180 / R`` deg (11.25 at R = 16). Printed per misalignment bin
+and per folder: episodes, grasps held, assemblies.
 
 Run: ``.venv/bin/python benchmarks/probe_policy_jaw_angle.py
 runs/paper_light_s0/eval/vgs/s0/nominal runs/paper_light_s0/eval/baseline/s0/nominal``
@@ -34,12 +36,25 @@ from vgs.grasping.actions import rotation_angle
 BINS = [0.0, 2.0, 4.0, 6.0, 8.0, 11.25, 90.0]
 
 
-def misalignments(folder: Path, runner: EpisodeRunner, rotations: int) -> pd.DataFrame:
-    """One row per journal episode: misalignment [deg], grasp held, assembled."""
-    journal, _ = read_journal(folder / "journal.jsonl")
-    rows = [r for r in journal.values() if "rotation" in r]
+def folder_rows(folder: Path, last: int | None) -> list[dict]:
+    """The test episodes of an evaluation folder (``journal.jsonl``), or the greedy episodes of
+    a training run (``episodes.csv``, rows not explored; the last ``last`` of them if given)."""
+    if (folder / "episodes.csv").exists():
+        table = pd.read_csv(folder / "episodes.csv")
+        table = table[~table.explored.astype(bool)]
+        rows = table.tail(last).to_dict("records") if last else table.to_dict("records")
+    else:
+        journal, _ = read_journal(folder / "journal.jsonl")
+        rows = [r for r in journal.values() if "rotation" in r]
     if not rows:
-        raise SystemExit(f"{folder}: no test episodes with a rotation in journal.jsonl")
+        raise SystemExit(f"{folder}: no greedy training episodes or test episodes to read")
+    return rows
+
+
+def misalignments(folder: Path, runner: EpisodeRunner, rotations: int,
+                  last: int | None = None) -> pd.DataFrame:
+    """One row per episode: misalignment [deg], grasp held, assembled."""
+    rows = folder_rows(folder, last)
     cfg = runner.cfg
     cell, _ = runner.cell(cfg.cell.peg)
     out = []
@@ -50,13 +65,16 @@ def misalignments(folder: Path, runner: EpisodeRunner, rotations: int) -> pd.Dat
         pads_yaw = pads_heading(rotation_angle(int(r["rotation"]), rotations))
         folded = (math.degrees(pads_yaw - peg_yaw) + 90.0) % 180.0 - 90.0
         out.append({"misalignment_deg": abs(folded), "held": bool(r["grasp_success"]),
-                    "assembled": bool(r["assembly_success"])})
+                    "assembled": str(r["assembly_success"]) == "True"})
     return pd.DataFrame(out)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("folders", nargs="+", type=Path, help="evaluation folders")
+    parser.add_argument("folders", nargs="+", type=Path,
+                        help="evaluation folders or training run folders")
+    parser.add_argument("--last", type=int, default=None,
+                        help="a training run's last N greedy episodes only")
     parser.add_argument("--profile", default="paper-light")
     args = parser.parse_args()
     cfg = profile(args.profile)
@@ -64,7 +82,7 @@ def main() -> None:
     rotations = cfg.network.num_rotations
     print(f"R = {rotations}: the nearest rotation lies within {180 / rotations:.2f} deg")
     for folder in args.folders:
-        df = misalignments(folder, runner, rotations)
+        df = misalignments(folder, runner, rotations, args.last)
         df["bin"] = pd.cut(df.misalignment_deg, BINS, include_lowest=True)
         table = df.groupby("bin", observed=True).agg(
             episodes=("assembled", "size"), held=("held", "mean"),
