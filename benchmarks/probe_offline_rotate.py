@@ -4,13 +4,13 @@ An offline analysis probe; figures only, nothing in vgs depends on it.
 
 Fresh networks, one per ``--rotate`` mode (``input``: the heightmaps are turned R times before
 the trunks, as in VPG and the paper; ``features``: one trunk pass and an angle-coded head, the
-`paper-light` profile's mode), are fitted to the same logged transitions of a finished training
-run (``episodes.csv``: scene seed, executed rotation and pixel, reward), in the same random
-order, with the agent's own SGD step (:meth:`GraspAgent.update`, target y = R). The heightmaps
-are re-rendered from the scene seeds as the replay does. Each network then chooses greedily
-(masked to the peg, as in the tests) on held-out test scenes, and the probe prints how far its
-jaws lie from the peg's true axis (ground truth, analysis only; as
-``probe_policy_jaw_angle.py``), beside the run's own final network.
+`paper-light` profile's mode until 2026-12-03), are fitted to the same logged transitions of a
+finished training run (``episodes.csv``: scene seed, executed rotation and pixel, reward), in
+the same random order, with the agent's own SGD step (:meth:`GraspAgent.update`, target
+y = R). The heightmaps are re-rendered from the scene seeds as the replay does. Each network
+then chooses greedily (masked to the peg, as in the tests) on held-out test scenes, and the
+probe prints how far its jaws lie from the peg's true axis (ground truth, analysis only;
+``probe_policy_jaw_angle.misalignment_deg``), beside the run's own final network.
 
 Run: ``.venv/bin/python benchmarks/probe_offline_rotate.py runs/paper_light_features_s0/train/vgs_s0
 --steps 5000 --test-seeds 200`` (what docs/training.md reports)
@@ -19,7 +19,6 @@ Run: ``.venv/bin/python benchmarks/probe_offline_rotate.py runs/paper_light_feat
 from __future__ import annotations
 
 import argparse
-import math
 import time
 from pathlib import Path
 
@@ -28,23 +27,13 @@ import pandas as pd
 import torch
 from tqdm import tqdm
 
+from probe_policy_jaw_angle import misalignment_deg  # this folder (the script's) is on sys.path
 from vgs.assembly.episode import EpisodeRunner
 from vgs.config import profile
-from vgs.experiments.policies import load_trained_agent, pads_heading
-from vgs.grasping.actions import rotation_angle
+from vgs.experiments.policies import load_trained_agent
 from vgs.grasping.agent import GraspAgent
 from vgs.grasping.preprocess import peg_mask
 from vgs.grasping.transition import Transition
-
-
-def misalignment_deg(runner: EpisodeRunner, seed: int, rotation: int, rotations: int) -> float:
-    """Angle [deg] in [0, 90] between the pads' long side and the peg's true axis."""
-    cell, _ = runner.cell(runner.cfg.cell.peg)
-    cell.reset(np.random.default_rng(seed))
-    _, R_world_peg = cell.peg_pose()
-    peg_yaw = math.atan2(R_world_peg[1, 2], R_world_peg[0, 2])
-    pads_yaw = pads_heading(rotation_angle(rotation, rotations))
-    return abs((math.degrees(pads_yaw - peg_yaw) + 90.0) % 180.0 - 90.0)
 
 
 def greedy_misalignments(agent: GraspAgent, runner: EpisodeRunner, maps: dict[int, tuple],

@@ -51,22 +51,25 @@ def folder_rows(folder: Path, last: int | None) -> list[dict]:
     return rows
 
 
+def misalignment_deg(runner: EpisodeRunner, seed: int, rotation: int, rotations: int) -> float:
+    """Angle [deg] in [0, 90] between the pads' long side for ``rotation`` and the true axis of
+    the peg in the scene of ``seed``."""
+    cell, _ = runner.cell(runner.cfg.cell.peg)
+    cell.reset(np.random.default_rng(seed))
+    _, R_world_peg = cell.peg_pose()
+    peg_yaw = math.atan2(R_world_peg[1, 2], R_world_peg[0, 2])
+    pads_yaw = pads_heading(rotation_angle(rotation, rotations))
+    return abs((math.degrees(pads_yaw - peg_yaw) + 90.0) % 180.0 - 90.0)
+
+
 def misalignments(folder: Path, runner: EpisodeRunner, rotations: int,
                   last: int | None = None) -> pd.DataFrame:
     """One row per episode: misalignment [deg], grasp held, assembled."""
-    rows = folder_rows(folder, last)
-    cfg = runner.cfg
-    cell, _ = runner.cell(cfg.cell.peg)
-    out = []
-    for r in rows:
-        cell.reset(np.random.default_rng(int(r["seed"])))
-        _, R_world_peg = cell.peg_pose()
-        peg_yaw = math.atan2(R_world_peg[1, 2], R_world_peg[0, 2])
-        pads_yaw = pads_heading(rotation_angle(int(r["rotation"]), rotations))
-        folded = (math.degrees(pads_yaw - peg_yaw) + 90.0) % 180.0 - 90.0
-        out.append({"misalignment_deg": abs(folded), "held": bool(r["grasp_success"]),
-                    "assembled": str(r["assembly_success"]) == "True"})
-    return pd.DataFrame(out)
+    return pd.DataFrame([
+        {"misalignment_deg": misalignment_deg(runner, int(r["seed"]), int(r["rotation"]),
+                                              rotations),
+         "held": bool(r["grasp_success"]), "assembled": str(r["assembly_success"]) == "True"}
+        for r in folder_rows(folder, last)])
 
 
 def main() -> None:

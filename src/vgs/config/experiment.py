@@ -136,8 +136,8 @@ def _medium() -> ExperimentConfig:
 def _paper_light() -> ExperimentConfig:
     # The paper's protocol (5000 grasps per policy, the first 1000 random, R = 16, 1000 tests
     # per policy and condition) sized for a 2-core CPU (issue 18): the light backbone, its
-    # heightmaps rotated R times before the trunks as in the paper and VPG (rotate="features",
-    # one trunk pass per decision, did not learn the jaw angle: benchmarks/
+    # heightmaps rotated R times before the trunks as in the paper and VPG (the cheaper
+    # rotate="features", one trunk pass per decision, did not learn the jaw angle: benchmarks/
     # probe_offline_rotate.py, docs/training.md), the baseline's training grasps without the
     # assembly its reward does not use, VGS's training assemblies stopped at the frozen reward
     # threshold (the same rewards either way), two parallel training episodes per run, and the
