@@ -13,7 +13,7 @@ Prints
   local Ray instance included, and without it);
 * the wall time of ``vgs reproduce --profile quick`` (``--quick`` runs it in a subprocess;
   ``--quick-dir`` reads the stage times of a finished run) (target: 15 minutes);
-* the ``paper-light`` protocol (issue 18: light backbone, R = 16, input rotation, the
+* the ``paper-light`` protocol (issue 18: light backbone, R = 16, input rotation, bfloat16, the
   baseline's training grasps without assembly, VGS's training assemblies stopped at the
   threshold, 1000 tests per learned policy and condition) projected from parts measured here in
   CPU seconds of one process: a whole episode, the same stopped at the median of their assembly
@@ -106,7 +106,11 @@ def ray_startup() -> float:
 
 def network_step_seconds(backbone: str, threads: int, rotate: str = "input",
                          precision: str = "float32") -> tuple[float, float]:
-    """(one training update incl. one replay, one greedy decision) at R = 16, 224 px [s]."""
+    """(one training update incl. one replay, one greedy decision) at R = 16, 224 px [s].
+
+    Each is timed after one untimed call of its own (oneDNN builds its kernels on the first
+    call, which in bfloat16 took longer than the call itself); the decision is the median of
+    three."""
     import torch
 
     from vgs.config import AgentConfig, NetworkConfig
@@ -128,10 +132,13 @@ def network_step_seconds(backbone: str, threads: int, rotate: str = "input",
     replay.add(tr, stats["delta_q"])
     agent.replay_update(replay, rng)
     update = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    agent.q_values(color, depth)
-    decide = time.perf_counter() - t0
-    return update, decide
+    agent.q_values(color, depth)  # warm-up
+    times = []
+    for _ in range(3):
+        t0 = time.perf_counter()
+        agent.q_values(color, depth)
+        times.append(time.perf_counter() - t0)
+    return update, float(np.median(times))
 
 
 def light_parts(episodes: int) -> dict[str, float]:
@@ -184,7 +191,8 @@ def light_projection(parts: dict[str, float], cores: int, efficiency: float) -> 
             (f"{n_tests} tests", tests)]
     total = sum(c for _, c in rows)
     print(f"paper-light protocol ({cfg.network.backbone}, R = {cfg.network.num_rotations}, "
-          f"rotate={cfg.network.rotate}; {n} grasps per policy, {n_tests} tests), "
+          f"rotate={cfg.network.rotate}, {cfg.network.precision}; {n} grasps per policy, "
+          f"{n_tests} tests), "
           "from parts measured in CPU seconds of one process:")
     print(f"  episode: whole {parts['whole']:.2f} s ({parts['success']:.0%} assembled), "
           f"stopped at {parts['limit_s']:.1f} s {parts['cut']:.2f} s, grasp only "

@@ -19,6 +19,8 @@ Run: ``.venv/bin/python benchmarks/probe_offline_rotate.py runs/paper_light_feat
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import itertools
 import time
 from pathlib import Path
 
@@ -63,6 +65,10 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=6000, help="SGD steps per network")
     parser.add_argument("--test-seeds", type=int, default=100)
     parser.add_argument("--net-seed", type=int, default=0)
+    parser.add_argument("--precision", nargs="+", default=["float32"],
+                        help="network.precision of the fitted networks (float32, bfloat16)")
+    parser.add_argument("--skip-own", action="store_true",
+                        help="do not measure the run's own final network")
     args = parser.parse_args()
     torch.set_num_threads(2)
     cfg = profile(args.profile)
@@ -82,17 +88,21 @@ def main() -> None:
           f"jaws within {180 / rotations:.2f} deg: {near.mean():.0%} of them, mean reward "
           f"{table.reward[near].mean():.3f}, beyond: {table.reward[~near].mean():.3f}")
     order = np.random.default_rng(args.net_seed).integers(len(table), size=args.steps)
-    for mode in args.rotate:
-        agent = GraspAgent(cfg.network, cfg.agent, seed=args.net_seed, rotate=mode)
+    for mode, precision in itertools.product(args.rotate, args.precision):
+        network_cfg = dataclasses.replace(cfg.network, precision=precision)
+        agent = GraspAgent(network_cfg, cfg.agent, seed=args.net_seed, rotate=mode)
         t0 = time.perf_counter()
-        for n in tqdm(order, desc=f"fit {mode}", mininterval=10):
+        for n in tqdm(order, desc=f"fit {mode} {precision}", mininterval=10):
             row = table.iloc[int(n)]
             color, depth = maps[int(row.seed)]
             agent.update(Transition(color, depth, (int(row.rotation), int(row.row),
                                                    int(row.col)), float(row.reward), done=True))
         fit = time.perf_counter() - t0
         m = greedy_misalignments(agent, runner, maps, test_seeds)
-        print(summary(f"rotate={mode}, {args.steps} steps", m, rotations, fit), flush=True)
+        print(summary(f"rotate={mode}, {precision}, {args.steps} steps", m, rotations, fit),
+              flush=True)
+    if args.skip_own:
+        return
     _, _, agent, episodes = load_trained_agent(args.run)
     m = greedy_misalignments(agent, runner, maps, test_seeds)
     print(summary(f"the run's own, {episodes} episodes", m, rotations, 0.0))

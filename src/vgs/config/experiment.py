@@ -140,12 +140,14 @@ def _paper_light() -> ExperimentConfig:
     # rotate="features", one trunk pass per decision, did not learn the jaw angle: benchmarks/
     # probe_offline_rotate.py, docs/training.md), the baseline's training grasps without the
     # assembly its reward does not use, VGS's training assemblies stopped at the frozen reward
-    # threshold (the same rewards either way), two parallel training episodes per run, and the
+    # threshold (the same rewards either way), two parallel training episodes per run, the
+    # network's forward passes in bfloat16 (2.1x faster decisions on a CPU with bfloat16 units;
+    # the offline probe learns the jaw angle as in float32: docs/training.md), and the
     # reference policy and the sweep left to their own commands (`vgs evaluate --policy
     # center`, `vgs sweep`).
     return ExperimentConfig(
         name="paper-light",
-        network=NetworkConfig(backbone="light", num_rotations=16),
+        network=NetworkConfig(backbone="light", num_rotations=16, precision="bfloat16"),
         train=TrainConfig(parallel_episodes=2, assemble_baseline=False,
                           stop_at_threshold=True),
         reproduce=ReproduceConfig(reference_policies=(), sweep_offsets=0),
