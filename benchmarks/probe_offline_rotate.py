@@ -19,7 +19,6 @@ Run: ``.venv/bin/python benchmarks/probe_offline_rotate.py runs/paper_light_feat
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import itertools
 import time
 from pathlib import Path
@@ -31,7 +30,7 @@ from tqdm import tqdm
 
 from probe_policy_jaw_angle import misalignment_deg  # this folder (the script's) is on sys.path
 from vgs.assembly.episode import EpisodeRunner
-from vgs.config import profile
+from vgs.config import override, profile
 from vgs.experiments.policies import load_trained_agent
 from vgs.grasping.agent import GraspAgent
 from vgs.grasping.preprocess import peg_mask
@@ -89,7 +88,7 @@ def main() -> None:
           f"{table.reward[near].mean():.3f}, beyond: {table.reward[~near].mean():.3f}")
     order = np.random.default_rng(args.net_seed).integers(len(table), size=args.steps)
     for mode, precision in itertools.product(args.rotate, args.precision):
-        network_cfg = dataclasses.replace(cfg.network, precision=precision)
+        network_cfg = override(cfg, "network.precision", precision).network
         agent = GraspAgent(network_cfg, cfg.agent, seed=args.net_seed, rotate=mode)
         t0 = time.perf_counter()
         for n in tqdm(order, desc=f"fit {mode} {precision}", mininterval=10):

@@ -8,7 +8,7 @@
 # pack keeps every file of RUN but TensorBoard logs, locks and temporary files, and for each
 # training run folder in it (one holding checkpoint.pt): a finished run (convergence.json
 # written) as its final network alone (vgs export-policy RUN --out RUN: policy.pt, 2.4 MB with
-# the light backbone), an unfinished one with its checkpoint (7.4 MB for a 5000-grasp light
+# the light backbone), an unfinished one with its checkpoint (4.9-7.4 MB for a 5000-grasp light
 # run). `vgs train` and `vgs reproduce` take a finished run kept that way as done and evaluate
 # its policy.pt; an unfinished one resumes from its checkpoint to the table an uninterrupted
 # run writes. Tables compress well (evaluation journals), checkpoints do not.
