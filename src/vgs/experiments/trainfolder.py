@@ -144,7 +144,7 @@ def save_checkpoint(path: Path, agent: GraspAgent, replay: ReplayBuffer, state: 
     eva, target = agent_state.pop("eva_net"), agent_state.pop("target_net")
     tensors = {"eva_net": eva, "optimizer": agent_state.pop("optimizer"),
                "replay_arrays": arrays, "torch_rng": torch.get_rng_state()}
-    if eva.keys() != target.keys() or not all(torch.equal(eva[k], target[k]) for k in eva):
+    if not all(torch.equal(eva[k], target[k]) for k in eva):  # one architecture: same keys
         tensors["target_net"] = target
     meta = {"episode": state.episode, "threshold": state.threshold,
             "exploration_times": state.exploration_times, "rng_state": state.rng_state,
