@@ -116,7 +116,7 @@ def test_too_few_successes_give_no_interval() -> None:
     assert np.isnan(gain.low) and "too few successes" in gain.text()
 
 
-def test_report_states_each_training_runs_own_wall_time(tmp_path: Path) -> None:
+def test_report_states_each_runs_own_wall_time(tmp_path: Path) -> None:
     """The runs' tables count what reproduce.json cannot: a run trained outside ``vgs
     reproduce`` (scripts/paper_light.sh's baseline), interrupted or moved between machines."""
     import json
@@ -143,3 +143,6 @@ def test_report_states_each_training_runs_own_wall_time(tmp_path: Path) -> None:
     text = build_report(run).read_text()
     assert "train 30.0 min, evaluate 90.0 min (2.00 h in all)" in text
     assert "baseline_s0 0.50 h, vgs_s0 1.50 h" in text
+    # The test episodes' own wall time, from the tables' wall_s (DATA's sums: 76.073 s,
+    # 58.056 s and 75.808 s).
+    assert "baseline 0.02 h, center 0.02 h, vgs 0.02 h (0.06 h in all)" in text

@@ -86,6 +86,15 @@ def load_results(out: Path) -> pd.DataFrame:
     return pd.concat([read_table(t) for t in tables], ignore_index=True)
 
 
+def eval_wall_h(df: pd.DataFrame) -> dict[str, float]:
+    """Each policy's summed test-episode wall time [h] (the ``wall_s`` column); empty for
+    tables written before it was recorded."""
+    if "wall_s" not in df.columns or not df["wall_s"].notna().any():
+        return {}
+    sums = df.groupby("policy", sort=True)["wall_s"].sum()
+    return {str(k): float(v) / 3600.0 for k, v in sums.items()}
+
+
 def hosts_note(df: pd.DataFrame) -> str:
     """A sentence on the hosts the test episodes ran on (``host_cpu``, ``mujoco_version``
     columns; tables written before they were recorded have none): empty when not recorded,
@@ -225,6 +234,14 @@ def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
                   "counts a run trained outside `vgs reproduce`, interrupted or moved between "
                   "machines; runs trained side by side overlap): " + ", ".join(
                       f"{name} {h:.2f} h" for name, h in own.items()) + ".")
+        tests = eval_wall_h(df)
+        if tests:
+            doc.p("The test episodes' own wall time, the sum of their `wall_s` per policy (it "
+                  "counts evaluations interrupted or moved between machines, which the stage "
+                  "times above miss; episodes run side by side overlap, so the elapsed time is "
+                  "about this sum over the number of workers): " + ", ".join(
+                      f"{name} {h:.2f} h" for name, h in tests.items())
+                  + f" ({sum(tests.values()):.2f} h in all).")
         train_cfg = meta.get("config", {}).get("train", {})
         shortcuts = []
         if train_cfg.get("assemble_baseline") is False:
