@@ -65,6 +65,9 @@ def test_time_per_assembled_peg_counts_failed_attempts() -> None:
     s = summarize(df)
     assert s["time_mean_s"] == pytest.approx(50.0)  # successful assemblies only
     assert s["time_per_assembled_s"] == pytest.approx((40.0 + 60.0 + 100.0) / 2)
+    # The paper's measure, the total time of all tests: failed attempts until given up.
+    assert s["time_all_h"] == pytest.approx((40.0 + 60.0 + 100.0) / 3600.0)
+    assert s["time_total_h"] == pytest.approx((40.0 + 60.0) / 3600.0)  # successes only
     assert summarize(df.assign(assembly_success=False))["time_per_assembled_s"] is None
 
 
