@@ -8,7 +8,6 @@ for logging and tests; the controller never calls them.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import mujoco
 import numpy as np
@@ -16,6 +15,7 @@ import numpy as np
 from vgs.config import CellConfig
 from vgs.errors import SimulationError
 from vgs.sim import objects, rg2, stiction, ur5
+from vgs.sim.ids import cell_ids
 
 # A joint configuration with the TCP at (0.42, -0.05, 0.25), tool z down, tool x along world x
 # (elbow up, wrist down; solved with the TCP Jacobian, checked in tests/test_kinematics.py).
@@ -66,72 +66,6 @@ def build_spec(cfg: CellConfig) -> mujoco.MjSpec:
     return spec
 
 
-@dataclass(frozen=True)
-class CellIds:
-    """Indices of the named elements the rest of vgs uses."""
-
-    arm_qpos: np.ndarray
-    arm_dof: np.ndarray
-    arm_act: np.ndarray
-    finger_act: np.ndarray
-    finger_qpos: np.ndarray
-    peg_body: int
-    peg_qpos: int
-    peg_dof: int
-    hole_mocap: int
-    tcp_site: int
-    flange_site: int
-    ft_site: int
-    ft_force_adr: int
-    ft_torque_adr: int
-    peg_geom: int
-    hole_geoms: np.ndarray
-    pad_geoms: np.ndarray
-    table_geom: int
-
-
-def _ids(m: mujoco.MjModel) -> CellIds:
-    def jid(name: str) -> int:
-        return mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, name)
-
-    def aid(name: str) -> int:
-        return mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, name)
-
-    def sid(name: str) -> int:
-        return mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, name)
-
-    def gid(name: str) -> int:
-        return mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, name)
-
-    arm_j = [jid(n) for n in ur5.JOINT_NAMES]
-    peg_j = jid("peg_free")
-    hole_body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "hole")
-    hole_geoms = np.flatnonzero(m.geom_bodyid == hole_body)
-    fsens = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, "ft_force")
-    tsens = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, "ft_torque")
-    return CellIds(
-        arm_qpos=np.array([m.jnt_qposadr[j] for j in arm_j]),
-        arm_dof=np.array([m.jnt_dofadr[j] for j in arm_j]),
-        arm_act=np.array([aid(n) for n in ur5.JOINT_NAMES]),
-        finger_act=np.array([aid("finger_left"), aid("finger_right")]),
-        finger_qpos=np.array([m.jnt_qposadr[jid("finger_left_joint")],
-                              m.jnt_qposadr[jid("finger_right_joint")]]),
-        peg_body=mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "peg"),
-        peg_qpos=int(m.jnt_qposadr[peg_j]),
-        peg_dof=int(m.jnt_dofadr[peg_j]),
-        hole_mocap=int(m.body_mocapid[hole_body]),
-        tcp_site=sid("tcp"),
-        flange_site=sid("flange"),
-        ft_site=sid("ft"),
-        ft_force_adr=int(m.sensor_adr[fsens]),
-        ft_torque_adr=int(m.sensor_adr[tsens]),
-        peg_geom=gid("peg"),
-        hole_geoms=hole_geoms,
-        pad_geoms=np.array([gid("pad_left"), gid("pad_right")]),
-        table_geom=gid("table"),
-    )
-
-
 class Cell:
     """A compiled cell with its state.
 
@@ -146,7 +80,7 @@ class Cell:
         self.spec = build_spec(cfg)
         self.model = self.spec.compile()
         self.data = mujoco.MjData(self.model)
-        self.ids = _ids(self.model)
+        self.ids = cell_ids(self.model)
         m = self.model
         for i, a in enumerate(self.ids.arm_act):
             m.actuator_gainprm[a, 0] = arm_kp[i]

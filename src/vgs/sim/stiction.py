@@ -51,7 +51,7 @@ from vgs.config import GripperConfig
 from vgs.sim.rg2 import grasp_moment_capacity
 
 if TYPE_CHECKING:
-    from vgs.sim.cell import CellIds
+    from vgs.sim.ids import CellIds
 
 WELD_NAME = "pad_stiction"
 
