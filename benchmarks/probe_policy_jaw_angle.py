@@ -39,7 +39,8 @@ BINS = [0.0, 2.0, 4.0, 6.0, 8.0, 11.25, 90.0]
 def folder_rows(folder: Path, last: int | None) -> list[dict]:
     """The test episodes of an evaluation folder (``journal.jsonl``), or the greedy episodes of
     a training run (``episodes.csv``, rows not explored; the last ``last`` of them if given)."""
-    if (folder / "episodes.csv").exists():
+    # A finished test folder also holds an episodes.csv, without the training column `explored`.
+    if not (folder / "journal.jsonl").exists():
         table = pd.read_csv(folder / "episodes.csv")
         table = table[~table.explored.astype(bool)]
         rows = table.tail(last).to_dict("records") if last else table.to_dict("records")
