@@ -28,7 +28,8 @@ Model of the projection (its assumptions, printed with it):
   does not overlap the simulation (the loop chooses a batch, waits for its physics, then
   updates): training = 5000 x (learner + simulation / (8 n)). Evaluation runs on c + 16 n
   workers, each deciding on one core. More threads for the learner on a larger node, or a GPU,
-  would shorten the learner's part; that is not measured here. Ray's
+  would shorten the learner's part; that is not measured here (``benchmarks/bench_gpu_node.sh``
+  measures a GPU node: docs/training.md). Ray's
   per-call overhead and the transfer of the configuration are left out (the pool measurement
   shows their size here), and the simulation is assumed to scale with the cores (the machine
   probe of ``bench_eval.py`` shows how far it does here).
