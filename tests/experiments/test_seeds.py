@@ -127,6 +127,9 @@ def test_report_files(tmp_path: Path) -> None:
     text = path.read_text()
     assert "1 of 2 training runs give VGS the shorter mean time" in text
     assert "includes zero" in text and "+13.83 %" in text
+    assert "two training runs only" in text  # an interval over two runs says little
     assert (tmp_path / "out" / "seeds.png").stat().st_size > 10_000
+    three = seeds_report([*folders, _folder(tmp_path, "s2", 0.10)], tmp_path / "out3")
+    assert "two training runs only" not in three.read_text()
     csv = pd.read_csv(tmp_path / "out" / "seeds.csv")
     assert list(csv["train_run"]) == ["s0", "s1", "mean"]

@@ -282,6 +282,9 @@ def seeds_markdown(table: pd.DataFrame, folders: list[Path], dest: Path, figure:
         else:
             verdict += ("one training run only: its interval covers the test episodes' noise, "
                         "not the spread between training runs; ")
+        if seeds == 2:
+            verdict += ("two training runs only: the crossed bootstrap draws its runs from two "
+                        "values, so its interval understates the spread between runs; ")
         if not math.isfinite(mean["gain_ci_low"]):
             verdict += "too few successes for an interval."
         elif mean["gain_ci_low"] > 0:
