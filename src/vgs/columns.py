@@ -144,6 +144,17 @@ SUMMARY_COLUMNS: dict[str, Column] = {
                                                   "training runs"),
     "seeds_with_positive_gain": Column("", "int", "training runs whose gain is positive"),
     "seeds": Column("", "int", "training runs averaged"),
+    "total_gain_pct": Column("%", "float", "gain in total time over the baseline, (S_base - S) "
+                                           "/ S_base on the summed times of all attempts "
+                                           "(the paper's measure)"),
+    "total_gain_ci_low": Column("%", "float", "lower end of the total-time gain's 95 % "
+                                              "interval"),
+    "total_gain_ci_high": Column("%", "float", "upper end of the total-time gain's 95 % "
+                                               "interval"),
+    "total_gain_sd_between_seeds": Column("%", "float", "standard deviation of the total-time "
+                                                        "gain between training runs"),
+    "seeds_with_positive_total_gain": Column("", "int", "training runs whose total-time gain "
+                                                        "is positive"),
     **{f"{name}_{policy}": Column(col.unit, col.kind, f"{col.description}, {policy}")
        for policy in ("baseline", "vgs")
        for name, col in (

@@ -10,6 +10,7 @@ import pytest
 
 from vgs.errors import ConfigError
 from vgs.experiments.seeds import load_seeds, mean_gain, seeds_report, seeds_table
+from vgs.experiments.stats import time_arrays, total_gain_pct
 
 
 def _table(policy: str, times: np.ndarray, run: str, root_seed: int = 7) -> pd.DataFrame:
@@ -54,6 +55,9 @@ def test_two_runs_give_their_gains_and_the_mean(tmp_path: Path) -> None:
     assert mean["seeds"] == 2 and mean["seeds_with_positive_gain"] == 2
     assert mean["gain_sd_between_seeds"] == pytest.approx(np.std([10, 20], ddof=1), abs=0.5)
     assert mean["successes_baseline"] == 600
+    # Every test assembled: the gain in total time is the gain on the mean (the paper's case).
+    assert mean["total_gain_pct"] == pytest.approx(mean["gain_pct"], abs=0.3)
+    assert mean["seeds_with_positive_total_gain"] == 2
 
 
 def test_mean_gain_of_identical_runs_is_the_run_gain() -> None:
@@ -77,6 +81,24 @@ def test_shared_scenes_do_not_average_out_over_runs() -> None:
     assert value == pytest.approx(mean_gain([pair])[0])
     assert (high4 - low4) == pytest.approx(high1 - low1, rel=0.2)
     assert (high4 - low4) > 0.8 * (high1 - low1)
+
+
+def test_total_time_gain_pays_for_failures() -> None:
+    """Baseline: half its tests assemble in 100 s, the other half fail after 200 s; VGS
+    assembles every test in 90 s. Mean of the successes: +10 %; total time (the paper's
+    measure): (150 - 90) / 150 = +40 %. A missed grasp (time NaN) costs none."""
+    n = 200
+    base = _table("baseline", np.where(np.arange(n) % 2 == 0, 100.0, 200.0), "s0")
+    base["assembly_success"] = np.arange(n) % 2 == 0
+    vgs = _table("vgs", np.full(n, 90.0), "s0")
+    assert mean_gain([(base, vgs)])[0] == pytest.approx(10.0)
+    value, low, high = mean_gain([(base, vgs)], measure=total_gain_pct, min_successes=0)
+    assert value == pytest.approx(40.0)
+    assert low < 40.0 < high and high - low < 10.0  # which tests failed varies per draw
+    missed = base.copy()
+    missed.loc[1, ["assembly_time_s", "grasp_success"]] = [np.nan, False]
+    expected = 100 * (1 - 90 * n / (150 * n - 200))
+    assert total_gain_pct(*time_arrays(missed), *time_arrays(vgs)) == pytest.approx(expected)
 
 
 def test_tables_on_other_episodes_are_refused() -> None:
@@ -131,5 +153,6 @@ def test_report_files(tmp_path: Path) -> None:
     assert (tmp_path / "out" / "seeds.png").stat().st_size > 10_000
     three = seeds_report([*folders, _folder(tmp_path, "s2", 0.10)], tmp_path / "out3")
     assert "two training runs only" not in three.read_text()
+    assert "three training runs only" in three.read_text()
     csv = pd.read_csv(tmp_path / "out" / "seeds.csv")
     assert list(csv["train_run"]) == ["s0", "s1", "mean"]
