@@ -118,6 +118,12 @@ COLUMNS: dict[str, Column] = {
 }
 
 _RATE = "fraction of the episodes"
+# The gains of VGS over the baseline (vgs.experiments.stats): on the mean times of the successes
+# (the report, seeds.csv) and on the summed times of all attempts (seeds.csv).
+_GAINS = (("gain", "efficiency gain over the baseline, (T_base - T) / T_base on the mean times "
+                   "of the successes"),
+          ("total_gain", "gain in total time over the baseline, (S_base - S) / S_base on the "
+                         "summed times of all attempts (the paper's measure)"))
 SUMMARY_COLUMNS: dict[str, Column] = {
     "condition": COLUMNS["condition"],
     "policy": COLUMNS["policy"],
@@ -136,25 +142,17 @@ SUMMARY_COLUMNS: dict[str, Column] = {
                                                  "included, per assembled peg"),
     "abs_grasp_offset_mean_mm": Column("mm", "float", "mean |grasp offset| from the centre of "
                                                       "mass"),
-    "gain_pct": Column("%", "float", "efficiency gain over the baseline, "
-                                     "(T_base - T) / T_base"),
-    "gain_ci_low": Column("%", "float", "lower end of the gain's 95 % interval"),
-    "gain_ci_high": Column("%", "float", "upper end of the gain's 95 % interval"),
-    "gain_sd_between_seeds": Column("%", "float", "standard deviation of the gain between "
-                                                  "training runs"),
-    "seeds_with_positive_gain": Column("", "int", "training runs whose gain is positive"),
+    **{name: col for prefix, what in _GAINS for name, col in (
+        (f"{prefix}_pct", Column("%", "float", what)),
+        (f"{prefix}_ci_low", Column("%", "float", f"lower end of the 95 % interval of "
+                                                  f"{prefix}_pct")),
+        (f"{prefix}_ci_high", Column("%", "float", f"upper end of the 95 % interval of "
+                                                   f"{prefix}_pct")),
+        (f"{prefix}_sd_between_seeds", Column("%", "float", f"standard deviation of {prefix}_pct "
+                                                            "between training runs")),
+        (f"seeds_with_positive_{prefix}", Column("", "int", f"training runs whose {prefix}_pct "
+                                                            "is positive")))},
     "seeds": Column("", "int", "training runs averaged"),
-    "total_gain_pct": Column("%", "float", "gain in total time over the baseline, (S_base - S) "
-                                           "/ S_base on the summed times of all attempts "
-                                           "(the paper's measure)"),
-    "total_gain_ci_low": Column("%", "float", "lower end of the total-time gain's 95 % "
-                                              "interval"),
-    "total_gain_ci_high": Column("%", "float", "upper end of the total-time gain's 95 % "
-                                               "interval"),
-    "total_gain_sd_between_seeds": Column("%", "float", "standard deviation of the total-time "
-                                                        "gain between training runs"),
-    "seeds_with_positive_total_gain": Column("", "int", "training runs whose total-time gain "
-                                                        "is positive"),
     **{f"{name}_{policy}": Column(col.unit, col.kind, f"{col.description}, {policy}")
        for policy in ("baseline", "vgs")
        for name, col in (
