@@ -26,8 +26,8 @@ table also gives the spread between seeds (sample standard deviation of ``g_s``)
 
 The same statistics on the paper's own measure, the total simulated time of all test attempts
 (``h_s = 100 (S_base,s - S_vgs,s) / S_base,s``, :func:`vgs.experiments.stats.total_gain_pct`):
-the paper's tests all assembled, so there the two measures coincide (+13.83 %); here a policy
-that often fails pays each failed attempt in ``h_s``, which ``g_s`` does not see.
+the paper's tests all assembled, so there the two measures coincide; here a policy that often
+fails pays each failed attempt in ``h_s``, which ``g_s`` does not see.
 """
 
 from __future__ import annotations
@@ -50,14 +50,15 @@ from vgs.experiments.report import PAPER, load_results  # noqa: E402
 from vgs.experiments.reportfigures import CONDITION_TITLES, LEARNED  # noqa: E402
 from vgs.experiments.stats import (  # noqa: E402
     BOOTSTRAP_RESAMPLES,
-    MIN_SUCCESSES,
+    MEAN_GAIN,
+    TOTAL_GAIN,
     Measure,
     efficiency_gain,
-    gain_pct,
     sample_std,
     time_arrays,
-    total_gain_pct,
 )
+
+GAINS = (MEAN_GAIN, TOTAL_GAIN)  # each gives the columns <name>_pct, <name>_ci_low, ...
 
 
 def load_seeds(folders: list[Path]) -> pd.DataFrame:
@@ -109,8 +110,8 @@ def load_seeds(folders: list[Path]) -> pd.DataFrame:
 
 
 def mean_gain(pairs: list[tuple[pd.DataFrame, pd.DataFrame]],
-              resamples: int = BOOTSTRAP_RESAMPLES, seed: int = 0, measure: Measure = gain_pct,
-              min_successes: int = MIN_SUCCESSES) -> tuple[float, float, float]:
+              resamples: int = BOOTSTRAP_RESAMPLES, seed: int = 0,
+              measure: Measure = MEAN_GAIN) -> tuple[float, float, float]:
     """Mean over training runs of the gain, with the crossed bootstrap's 95 % interval (runs
     and one shared draw of test scenes per replicate; module docstring).
 
@@ -119,15 +120,12 @@ def mean_gain(pairs: list[tuple[pd.DataFrame, pd.DataFrame]],
             (the same episode indices).
         resamples: Bootstrap resamples.
         seed: Seed of the resampling.
-        measure: The gain of one run on given scenes: :func:`~vgs.experiments.stats.gain_pct`
-            (mean of the successes) or :func:`~vgs.experiments.stats.total_gain_pct` (total
-            time of all attempts).
-        min_successes: Fewest successes per run and policy for an interval (0 for the total
-            time, which needs none).
+        measure: The gain of one run on given scenes: ``MEAN_GAIN`` (mean of the successes)
+            or ``TOTAL_GAIN`` (total time of all attempts), :mod:`vgs.experiments.stats`.
 
     Returns:
         ``(mean gain, low, high)`` in percent; the interval is NaN when a run has fewer than
-        ``min_successes`` successes for either policy.
+        ``measure.min_successes`` successes for either policy.
 
     Raises:
         ConfigError: If the tables do not hold the same episode indices.
@@ -140,7 +138,7 @@ def mean_gain(pairs: list[tuple[pd.DataFrame, pd.DataFrame]],
     gains = [measure(*a) for a in arrays]
     value = float(np.mean(gains)) if gains else math.nan
     if (not math.isfinite(value)
-            or min(min(a[1].sum(), a[3].sum()) for a in arrays) < min_successes):
+            or min(min(a[1].sum(), a[3].sum()) for a in arrays) < measure.min_successes):
         return value, math.nan, math.nan
     rng = np.random.default_rng(seed)
     out = np.empty(resamples)
@@ -173,9 +171,7 @@ def seeds_table(df: pd.DataFrame) -> pd.DataFrame:
                 continue  # only one of the two policies evaluated: no gain
             pairs.append((base, vgs))
             sb, sv = summarize(base), summarize(vgs)
-            gain = efficiency_gain(base, vgs)
-            total = efficiency_gain(base, vgs, measure=total_gain_pct, min_successes=0)
-            rows.append({
+            row: dict[str, Any] = {
                 "condition": condition, "train_run": run, "source": mine["source"].iloc[0],
                 "episodes": sb["episodes"],
                 "successes_baseline": sb["successes"], "successes_vgs": sv["successes"],
@@ -187,17 +183,15 @@ def seeds_table(df: pd.DataFrame) -> pd.DataFrame:
                 "time_all_h_baseline": sb["time_all_h"], "time_all_h_vgs": sv["time_all_h"],
                 "time_per_assembled_s_baseline": sb["time_per_assembled_s"],
                 "time_per_assembled_s_vgs": sv["time_per_assembled_s"],
-                "gain_pct": gain.value, "gain_ci_low": gain.low, "gain_ci_high": gain.high,
-                "total_gain_pct": total.value, "total_gain_ci_low": total.low,
-                "total_gain_ci_high": total.high,
-            })
+            }
+            for m in GAINS:
+                gain = efficiency_gain(base, vgs, measure=m)
+                row.update({f"{m.name}_pct": gain.value, f"{m.name}_ci_low": gain.low,
+                            f"{m.name}_ci_high": gain.high})
+            rows.append(row)
         if not pairs:
             continue
         mine_rows = [r for r in rows if r["condition"] == condition]
-        value, low, high = mean_gain(pairs)
-        t_value, t_low, t_high = mean_gain(pairs, measure=total_gain_pct, min_successes=0)
-        gains = np.array([r["gain_pct"] for r in mine_rows], float)
-        totals = np.array([r["total_gain_pct"] for r in mine_rows], float)
         mean_row: dict[str, Any] = {"condition": condition, "train_run": "mean", "source": "",
                                     "episodes": int(sum(r["episodes"] for r in mine_rows))}
         for key in mine_rows[0]:
@@ -205,12 +199,14 @@ def seeds_table(df: pd.DataFrame) -> pd.DataFrame:
                 values = [r[key] for r in mine_rows if r[key] is not None]
                 mean_row[key] = (int(sum(values)) if key.startswith("successes")
                                  else float(np.mean(values)) if values else None)
-        mean_row.update(gain_pct=value, gain_ci_low=low, gain_ci_high=high,
-                        gain_sd_between_seeds=sample_std(gains),
-                        seeds_with_positive_gain=int(np.sum(gains > 0)), seeds=len(mine_rows),
-                        total_gain_pct=t_value, total_gain_ci_low=t_low, total_gain_ci_high=t_high,
-                        total_gain_sd_between_seeds=sample_std(totals),
-                        seeds_with_positive_total_gain=int(np.sum(totals > 0)))
+        for m in GAINS:
+            value, low, high = mean_gain(pairs, measure=m)
+            gains = np.array([r[f"{m.name}_pct"] for r in mine_rows], float)
+            mean_row.update({f"{m.name}_pct": value, f"{m.name}_ci_low": low,
+                             f"{m.name}_ci_high": high,
+                             f"{m.name}_sd_between_seeds": sample_std(gains),
+                             f"seeds_with_positive_{m.name}": int(np.sum(gains > 0))})
+        mean_row["seeds"] = len(mine_rows)
         rows.append(mean_row)
     if not rows:
         raise ConfigError("seeds", "no condition has both a baseline and a VGS evaluation")
@@ -230,13 +226,14 @@ def plot_seeds(table: pd.DataFrame, path: Path) -> Path:
         for _, row in part.iterrows():
             mean = row["train_run"] == "mean"
             # Upper mark: the mean of the successes; lower: the total time of all tests.
-            for key, color, dy in (("gain", "black" if mean else "tab:red", 0.12),
-                                   ("total_gain", "tab:green", -0.12)):
+            for key, color, dy in ((MEAN_GAIN.name, "black" if mean else "tab:red", 0.12),
+                                   (TOTAL_GAIN.name, "tab:green", -0.12)):
                 yi = y_of[row["train_run"]] + dy
                 if math.isfinite(row[f"{key}_ci_low"]):
                     ax.plot([row[f"{key}_ci_low"], row[f"{key}_ci_high"]], [yi, yi],
                             color=color, lw=2.5 if mean else 1.5)
-                ax.plot(row[f"{key}_pct"], yi, "D" if mean else ("o" if key == "gain" else "s"),
+                ax.plot(row[f"{key}_pct"], yi,
+                        "D" if mean else ("o" if key == MEAN_GAIN.name else "s"),
                         color=color, ms=7 if mean else 5)
         ax.axvline(0.0, color="gray", lw=0.8)
         paper = PAPER.get(condition, {}).get("gain")
@@ -265,7 +262,7 @@ def _fmt(value: Any, digits: int = 1, suffix: str = "") -> str:
     return f"{value:.{digits}f}{suffix}"
 
 
-def _gain_text(row: pd.Series, key: str = "gain") -> str:
+def _gain_text(row: pd.Series, key: str = MEAN_GAIN.name) -> str:
     value, low, high = row[f"{key}_pct"], row[f"{key}_ci_low"], row[f"{key}_ci_high"]
     if not math.isfinite(value):
         return "n/a"
@@ -315,7 +312,7 @@ def seeds_markdown(table: pd.DataFrame, folders: list[Path], dest: Path, figure:
                 f"{_fmt(r['time_mean_s_vgs'])} | {_fmt(r['time_all_h_baseline'], 2)} / "
                 f"{_fmt(r['time_all_h_vgs'], 2)} | {_fmt(r['time_per_assembled_s_baseline'])} / "
                 f"{_fmt(r['time_per_assembled_s_vgs'])} | {_gain_text(r)} | "
-                f"{_gain_text(r, 'total_gain')} |")
+                f"{_gain_text(r, TOTAL_GAIN.name)} |")
         mean = part[part["train_run"] == "mean"].iloc[0]
         seeds = int(mean["seeds"])
         verdict = (f"{int(mean['seeds_with_positive_gain'])} of {seeds} training runs give VGS "
