@@ -179,6 +179,19 @@ def hosts_of(rows: Any) -> list[str]:
     return [] if names == ["unrecorded"] else names
 
 
+def engine_note(rows: Any) -> str:
+    """One sentence when rows (dicts with ``mujoco_version``) were made with another MuJoCo than
+    the installed one, else ``""``: the same scene seeds give other physics on another engine
+    (pyproject.toml pins the version the published results were made with)."""
+    installed = host()["mujoco_version"]
+    other = sorted({str(v) for row in rows
+                    if not _missing(v := row.get("mujoco_version")) and str(v) != installed})
+    if not other:
+        return ""
+    return (f"made with MuJoCo {', '.join(other)}, installed {installed}: the same seeds can "
+            "end differently on another physics engine")
+
+
 def _missing(value: Any) -> bool:
     return value is None or (isinstance(value, float) and value != value) or value == ""
 

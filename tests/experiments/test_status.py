@@ -133,3 +133,13 @@ def test_status_does_not_import_torch(tmp_path: Path) -> None:
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     assert "0/5" in proc.stdout
+
+
+def test_engine_note_names_another_mujoco_and_is_silent_for_the_installed_one() -> None:
+    from vgs.runfolder import engine_note, host
+
+    installed = host()["mujoco_version"]
+    assert engine_note([{"mujoco_version": installed}, {"host_cpu": "x"}]) == ""
+    note = engine_note([{"mujoco_version": installed}, {"mujoco_version": "3.3.0"}])
+    assert "MuJoCo 3.3.0" in note and f"installed {installed}" in note
+    assert "\n" not in note

@@ -101,8 +101,11 @@ def hosts_note(df: pd.DataFrame) -> str:
     a warning naming the evaluations whose episodes come from several hosts."""
     if "host_cpu" not in df.columns:
         return ""
-    from vgs.runfolder import hosts_of
+    from vgs.runfolder import engine_note, hosts_of
 
+    records = df[["host_cpu", "mujoco_version"]].to_dict("records")
+    engine = engine_note(records)
+    engine = f" **Engine.** The test episodes were {engine}." if engine else ""
     keys = [k for k in ("policy", "condition", "train_run") if k in df.columns]
     mixed = []
     for key, part in df.groupby(keys, sort=True):
@@ -113,9 +116,9 @@ def hosts_note(df: pd.DataFrame) -> str:
     if mixed:
         return ("**Hosts.** The episodes of " + ", ".join(mixed) + " come from several hosts: "
                 "MuJoCo's floating point differs between CPUs, so the same scene can end "
-                "differently on another host; compare such results with care.")
-    names = hosts_of(df[["host_cpu", "mujoco_version"]].to_dict("records"))
-    return f"All test episodes ran on one host: {names[0]}." if names else ""
+                "differently on another host; compare such results with care." + engine)
+    names = hosts_of(records)
+    return (f"All test episodes ran on one host: {names[0]}." if names else "") + engine
 
 
 

@@ -26,7 +26,7 @@ from vgs.config import ExperimentConfig, from_dict
 from vgs.errors import ConfigError, CorruptFileError
 from vgs.experiments.journal import read_journal
 from vgs.experiments.layout import eval_jobs, train_runs
-from vgs.runfolder import hosts_of, read_json
+from vgs.runfolder import engine_note, hosts_of, read_json
 
 RATE_WINDOW = 50  # episodes behind a rate
 
@@ -137,6 +137,8 @@ def train_progress(folder: Path, name: str | None = None) -> Progress:
         names = hosts_of(hosts)
         notes.append(f"trained on {len(hosts)} hosts ({'; '.join(names)}): the same scene can "
                      "end differently on another CPU")
+    if engine := engine_note(hosts):
+        notes.append(engine)
     if rows:
         window = rows[-RATE_WINDOW:]
         grasp = sum(_flag(r.get("grasp_success")) for r in window) / len(window)
@@ -179,6 +181,8 @@ def eval_progress(folder: Path, name: str | None = None, total: int | None = Non
     if len(hosts) > 1:
         notes.append(f"episodes from {len(hosts)} hosts ({'; '.join(hosts)}): the same scene "
                      "can end differently on another CPU")
+    if engine := engine_note(rows):
+        notes.append(engine)
     walls = [_number(r.get("wall_s")) for r in rows[-RATE_WINDOW:]]
     walls = [w for w in walls if w is not None]
     last = _age(journal, meta_path) if (rows or meta_path.exists()) else None
