@@ -96,6 +96,9 @@ COLUMNS: dict[str, Column] = {
     "peak_grasp_moment_nm": Column("N m", "float", "ground truth, analysis only: largest "
                                                    "moment about the pinch axis the fingers "
                                                    "exerted on the peg during the assembly"),
+    "jaw_misalignment_deg": Column("deg", "float", "ground truth, analysis only: angle between "
+                                                   "the pads' long side and the peg's axis in "
+                                                   "the table plane at the decision, 0-90"),
     # the policy's decision
     "rotation": Column("", "int", "index of the grasp rotation (-1: no network decision)"),
     "row": Column("", "int", "heightmap row of the grasp pixel (-1: none)"),

@@ -61,6 +61,25 @@ def peg_axis_from_heightmap(hm: Heightmap) -> tuple[np.ndarray, np.ndarray, floa
     return center, axis, float(proj.max() - proj.min() + hm.pixel_size)
 
 
+def jaw_misalignment_deg(yaw: float, R_world_peg: np.ndarray) -> float:
+    """Angle between the pads' long side and the peg's axis in the table plane [deg].
+
+    With the pads' heading ``u = (cos yaw, sin yaw)`` and the peg's axis ``a`` (third column of
+    ``R_world_peg``) projected on the table, ``(a_x, a_y)``,
+
+        misalignment = acos(|u . (a_x, a_y)| / |(a_x, a_y)|),
+
+    folded into [0, 90] deg because the two pads are symmetric. Ground truth for the record
+    only (analysis: which grasps hold but cannot assemble); NaN if the axis stands upright.
+    """
+    ax, ay = float(R_world_peg[0, 2]), float(R_world_peg[1, 2])
+    norm = math.hypot(ax, ay)
+    if norm < 1e-9:
+        return math.nan
+    cos = abs(math.cos(yaw) * ax + math.sin(yaw) * ay) / norm
+    return math.degrees(math.acos(min(1.0, cos)))
+
+
 def offset_policy(offset: float) -> Policy:
     """Grasp the peg ``offset`` metres from its visible centre along its visible axis."""
 
@@ -208,6 +227,7 @@ class EpisodeRunner:
         robot = Robot(cell, self.cfg.controller, np.random.default_rng([seed, 1]), trace=trace)
         try:
             command = policy(hm)
+            record.jaw_misalignment_deg = jaw_misalignment_deg(command.yaw, cell.peg_pose()[1])
             row, col = hm.world_to_pixel(command.x, command.y)
             inside = 0 <= row < hm.depth.shape[0] and 0 <= col < hm.depth.shape[1]
             surface = float(hm.depth[row, col]) if inside else 0.0

@@ -43,6 +43,10 @@ class EpisodeRecord:
         peak_grasp_moment: Ground truth (analysis only): largest moment about the pinch axis
             that the fingers' contact forces exerted on the peg, about the TCP, sampled at 25 Hz
             during the assembly [N m].
+        jaw_misalignment_deg: Ground truth (analysis only, never seen by a policy or the
+            assembly module): the angle between the pads' long side as commanded and the
+            peg's true axis in the table plane when the policy decided, folded into [0, 90]
+            [deg]; 0 means the jaws close straight across the peg.
     """
 
     seed: int
@@ -62,6 +66,7 @@ class EpisodeRecord:
     peak_moment_measured: float = math.nan
     peg_turn_deg: float = math.nan
     peak_grasp_moment: float = math.nan
+    jaw_misalignment_deg: float = math.nan
 
     def to_row(self) -> dict[str, object]:
         """Flat dict (one table row) in the column vocabulary of :mod:`vgs.columns`: names with

@@ -27,14 +27,14 @@ from vgs.runfolder import check_request, host, read_json
 # Column vocabulary of vgs.columns; booleans are written True/False (0/1 before 2026-12).
 CSV_COLUMNS = (
     "episode", "mode", "seed", "epsilon", "explored", "rotation", "row", "col", "q_value",
-    "grasp_success", "grasp_offset_mm", "assembly_success", "assembly_time_s", "adjustments",
-    "failure_reason", "r_grasp", "r_assembly", "reward", "threshold_s", "loss", "delta_q",
+    "grasp_success", "grasp_offset_mm", "jaw_misalignment_deg", "assembly_success",
+    "assembly_time_s", "adjustments", "failure_reason", "r_grasp", "r_assembly", "reward", "threshold_s", "loss", "delta_q",
     "wall_s",
 )
 
 
-RECORD_COLUMNS = ("grasp_success", "grasp_offset_mm", "assembly_success", "assembly_time_s",
-                  "adjustments", "failure_reason")  # from EpisodeRecord.to_row()
+RECORD_COLUMNS = ("grasp_success", "grasp_offset_mm", "jaw_misalignment_deg",
+                  "assembly_success", "assembly_time_s", "adjustments", "failure_reason")  # from EpisodeRecord.to_row()
 
 
 def episode_seed(root: int, episode: int) -> int:
