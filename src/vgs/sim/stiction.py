@@ -94,10 +94,22 @@ class PadStiction:
         self.peg_radius = peg_radius
         self.capacity_per_newton = grasp_moment_capacity(cfg) / (2.0 * cfg.force)
         self._qfrc = np.zeros(model.nv)
-        self._mask = np.zeros(0)
-        self._weights = np.zeros(0)
+        self._weights = np.zeros(0)  # the rows' weights of _selected_wrench
         self._vel = np.zeros(6)
         self._vel_housing = np.zeros(6)
+        # Views into the state and work arrays, made once: the latch runs every control tick,
+        # where numpy's per-call overhead on 3-vectors costs more than the arithmetic.
+        dof = ids.peg_dof
+        self._f_peg = self._qfrc[dof:dof + 3]  # J^T f on the peg's free joint: world force
+        self._tau_peg_local = self._qfrc[dof + 3:dof + 6]  # and torque, peg frame
+        self._R_world_peg = data.xmat[self.peg].reshape(3, 3)
+        self._p_world_peg = data.xpos[self.peg]
+        self._R_tcp_world = data.site_xmat[self.tcp].reshape(3, 3).T
+        self._p_world_tcp = data.site_xpos[self.tcp]
+        self._tau = np.zeros(3)
+        self._mom = np.zeros(3)
+        self._f_tool = np.zeros(3)
+        self._mom_tool = np.zeros(3)
         # Ground truth for records and tests: how often the pads broke loose, the last load.
         self.breaks = 0
         self.last_load = 0.0
@@ -110,13 +122,15 @@ class PadStiction:
     def update(self) -> None:
         """Check the latch after the physics steps of one control tick."""
         d, grip = self.data, self.cfg.force
-        stuck = self.stuck
+        stuck = bool(d.eq_active[self.eq])
+        if not stuck and not d.ncon:
+            self.last_load = 0.0  # nothing touches anything: no pinch
+            return
         n_left, n_right = self._select_pad_rows()
         if not stuck and min(n_left, n_right) < ENGAGE_FRACTION * grip:
             self.last_load = 0.0  # no pinch: nothing to stick (the grasp's idle ticks)
             return
-        f, mom = self._selected_wrench()
-        load = self._limit_value(f, mom, n_left + n_right)
+        load = self._limit_value(*self._selected_wrench(), n_left + n_right)
         self.last_load = load
         if stuck:
             # The pinch, from both pads together: while stuck the weld also carries the pinch,
@@ -166,35 +180,35 @@ class PadStiction:
         """The wrench the weld alone exerts on the peg while the pads stick (zero otherwise): the
         force and the moment about the TCP in the tool frame [N, N m], what the stick state
         carries beyond the pads' contacts (the grasp watch's record)."""
-        self._mark_weld_rows(self._fresh_mask())
-        return self._selected_wrench()
+        efc_force = self.data.efc_force.tolist()
+        weights = [0.0] * len(efc_force)
+        self._copy_weld_rows(weights, efc_force)
+        self._weights = np.array(weights)
+        f, mom = self._selected_wrench()
+        return np.array(f), np.array(mom)
 
-    def _fresh_mask(self) -> np.ndarray:
-        """The row mask of :meth:`_selected_wrench`, zeroed and sized to this step's rows."""
-        if self._mask.shape[0] != self.data.nefc:
-            self._mask = np.zeros(self.data.nefc)
-        else:
-            self._mask.fill(0.0)
-        return self._mask
-
-    def _mark_weld_rows(self, mask: np.ndarray) -> None:
-        """Mark the weld's constraint rows (none unless the pads stick)."""
+    def _copy_weld_rows(self, weights: list[float], efc_force: list[float]) -> None:
+        """Copy the weld's constraint forces into ``weights`` (no rows unless the pads
+        stick)."""
         ne = self.data.ne  # equality rows come first
         if ne:
-            mask[:ne] = self.data.efc_id[:ne] == self.eq
+            eq = self.eq
+            for i, row_eq in enumerate(self.data.efc_id[:ne].tolist()):
+                if row_eq == eq:
+                    weights[i] = efc_force[i]
 
     def _select_pad_rows(self) -> tuple[float, float]:
-        """Mark the constraint rows of the gripper's wrench on the peg (the pad contacts' and
-        the weld's) and return the pads' normal forces [N] (with elliptic cones a contact's
-        first row is its normal force)."""
+        """Set the row weights of the gripper's wrench on the peg (the pad contacts' and the
+        weld's constraint forces, zero elsewhere) and return the pads' normal forces [N] (with
+        elliptic cones a contact's first row is its normal force)."""
         d = self.data
-        mask = self._fresh_mask()
+        efc_force = d.efc_force.tolist()
+        weights = [0.0] * len(efc_force)
         n_left = n_right = 0.0
         if d.ncon:
             # Plain Python over the few contacts: per tick, numpy's per-call overhead on arrays
             # this small cost more than the loop (this method runs once per control tick).
             con = d.contact
-            efc_force = d.efc_force
             peg, (pad_left, pad_right) = self.peg_geom, self.pads
             for (g0, g1), a, n in zip(con.geom.tolist(), con.efc_address.tolist(),
                                       con.dim.tolist(), strict=True):
@@ -206,34 +220,37 @@ class PadStiction:
                     continue
                 if a < 0 or (other != pad_left and other != pad_right):
                     continue
-                mask[a:a + n] = 1.0
+                weights[a:a + n] = efc_force[a:a + n]
                 if other == pad_left:
-                    n_left += float(efc_force[a])
+                    n_left += efc_force[a]
                 else:
-                    n_right += float(efc_force[a])
-        self._mark_weld_rows(mask)
+                    n_right += efc_force[a]
+        self._copy_weld_rows(weights, efc_force)
+        self._weights = np.array(weights)
         return n_left, n_right
 
-    def _selected_wrench(self) -> tuple[np.ndarray, np.ndarray]:
+    def _selected_wrench(self) -> tuple[list[float], list[float]]:
         """Force and moment about the TCP, tool frame, of the rows :meth:`_select_pad_rows`
-        marked: their constraint forces mapped onto the peg's free joint (``J^T f``), the
-        world-frame force at the peg's origin and the torque in the peg's frame."""
-        m, d = self.model, self.data
-        weights = self._weights
-        if weights.shape[0] != d.nefc:
-            weights = self._weights = np.empty(d.nefc)
-        np.multiply(self._mask, d.efc_force[:d.nefc], out=weights)
-        mujoco.mj_mulJacTVec(m, d, self._qfrc, weights)
-        q = self._qfrc[self.peg_dofs]
-        f = q[:3]
-        tau = d.xmat[self.peg].reshape(3, 3) @ q[3:]
-        r = d.xpos[self.peg] - d.site_xpos[self.tcp]
-        mom = tau + np.array([r[1] * f[2] - r[2] * f[1], r[2] * f[0] - r[0] * f[2],
-                              r[0] * f[1] - r[1] * f[0]])
-        R = d.site_xmat[self.tcp].reshape(3, 3)
-        return R.T @ f, R.T @ mom
+        weighted: their constraint forces mapped onto the peg's free joint (``J^T f``), the
+        world-frame force ``f`` at the peg's origin and the torque ``tau`` in the peg's
+        frame; ``m = R_world_peg tau + r x f`` about the TCP, ``r = p_peg - p_tcp``; both
+        turned into the tool frame by ``R_world_tcp^T``. The cross product on Python floats,
+        the matrix products in numpy (its products round differently from a sum written out)."""
+        mujoco.mj_mulJacTVec(self.model, self.data, self._qfrc, self._weights)
+        tau = np.matmul(self._R_world_peg, self._tau_peg_local, out=self._tau).tolist()
+        f0, f1, f2 = self._f_peg.tolist()
+        p0, p1, p2 = self._p_world_peg.tolist()
+        t0, t1, t2 = self._p_world_tcp.tolist()
+        r0, r1, r2 = p0 - t0, p1 - t1, p2 - t2
+        mom = self._mom
+        mom[0] = tau[0] + (r1 * f2 - r2 * f1)
+        mom[1] = tau[1] + (r2 * f0 - r0 * f2)
+        mom[2] = tau[2] + (r0 * f1 - r1 * f0)
+        R_tcp_world = self._R_tcp_world
+        return (np.matmul(R_tcp_world, self._f_peg, out=self._f_tool).tolist(),
+                np.matmul(R_tcp_world, mom, out=self._mom_tool).tolist())
 
-    def _limit_value(self, f: np.ndarray, mom: np.ndarray, normal: float) -> float:
+    def _limit_value(self, f: list[float], mom: list[float], normal: float) -> float:
         """The tool-frame wrench's place on the pads' ellipsoidal limit surface: 1 on it."""
         if normal <= 0.0:
             return math.inf
