@@ -106,6 +106,13 @@ class GraspWatch:
     ``every``-th control tick (25 Hz by default, so a peak is the largest sampled moment) and
     stops looking when the robot starts to release the peg. ``turn_deg`` is the largest angle
     between the peg's axis in the tool frame and its axis at the start.
+
+    A contact ``i`` on the peg pushes it with the force ``f_i = C_i^T f_c`` (world frame, from
+    its contact frame ``C_i``) at ``p_i``, and with a torsional torque ``t_c n_i`` about its
+    normal; its moment about the TCP is ``(p_i - p_tcp) x f_i + t_c n_i``, of which the record
+    takes the component along the pinch axis. The cross products are written out on Python
+    floats (they round as numpy's do); the matrix and dot products stay numpy's, whose
+    summation order the record depends on.
     """
 
     def __init__(self, robot: Robot, every: int = 4) -> None:
@@ -113,55 +120,72 @@ class GraspWatch:
         self.cell = robot.cell
         self.every = every
         self._n = 0
-        self._R0 = self._relative()
+        d, ids, m = self.cell.data, self.cell.ids, self.cell.model
+        # Views into the simulator's state, made once.
+        R_world_tcp = d.site_xmat[ids.tcp_site].reshape(3, 3)
+        self._R_tcp_world = R_world_tcp.T
+        self._pinch_world = R_world_tcp[:, 1]
+        self._p_world_tcp = d.site_xpos[ids.tcp_site]
+        self._peg_axis_world = d.xmat[ids.peg_body].reshape(3, 3)[:, 2]
+        self._axis_tcp = np.zeros(3)
+        self._R0 = self._relative().copy()
         self.turn_deg = 0.0
         self.peak_moment = 0.0
         self._f = np.zeros(6)
-        ids = self.cell.ids
-        m = self.cell.model
+        self._f_world = np.zeros(3)
+        self._torque = np.zeros(3)
         finger_bodies = {int(m.geom_bodyid[g]) for g in ids.pad_geoms}
-        self._is_finger = np.array([int(m.geom_bodyid[g]) in finger_bodies
-                                    for g in range(m.ngeom)])
+        self._is_finger = [int(m.geom_bodyid[g]) in finger_bodies for g in range(m.ngeom)]
         self._peg = int(ids.peg_geom)
 
     def _relative(self) -> np.ndarray:
-        """The peg's axis in the tool frame (its spin about its own axis does not matter)."""
-        d, ids = self.cell.data, self.cell.ids
-        R_tcp = d.site_xmat[ids.tcp_site].reshape(3, 3)
-        return R_tcp.T @ d.xmat[ids.peg_body].reshape(3, 3)[:, 2]
+        """The peg's axis in the tool frame (its spin about its own axis does not matter);
+        overwritten by the next call."""
+        return np.matmul(self._R_tcp_world, self._peg_axis_world, out=self._axis_tcp)
 
     def __call__(self) -> None:
         if self.robot.phase == "release":
             return
         self._n += 1
-        if self._n % self.every:
-            return
+        if self._n % self.every == 0:
+            self._sample()
+
+    def _sample(self) -> None:
+        """One sample: the peg's turn in the pads and the moment on it about the pinch axis."""
         cos = float(np.dot(self._relative(), self._R0))
         self.turn_deg = max(self.turn_deg,
                             math.degrees(math.acos(max(-1.0, min(1.0, cos)))))
-        m, d, ids = self.cell.model, self.cell.data, self.cell.ids
-        ncon = d.ncon
-        if ncon == 0:
+        m, d = self.cell.model, self.cell.data
+        if d.ncon == 0:
             return
-        geom = d.contact.geom[:ncon]
-        on_peg = (geom[:, 0] == self._peg) | (geom[:, 1] == self._peg)
-        on_finger = self._is_finger[geom].any(axis=1)
-        rows = np.flatnonzero(on_peg & on_finger)
-        if rows.size == 0:
+        con = d.contact
+        peg, is_finger = self._peg, self._is_finger
+        rows = [i for i, (g0, g1) in enumerate(con.geom.tolist())
+                if (g0 == peg or g1 == peg) and (is_finger[g0] or is_finger[g1])]
+        if not rows:
             return
-        tcp = d.site_xpos[ids.tcp_site]
-        pinch = d.site_xmat[ids.tcp_site].reshape(3, 3)[:, 1]
+        geom, frames, dims, pos = con.geom, con.frame, con.dim, con.pos
+        tx, ty, tz = self._p_world_tcp.tolist()
+        pinch = self._pinch_world
+        f_c, f_world, torque = self._f, self._f_world, self._torque
         moment = 0.0
-        for i in rows.tolist():
-            mujoco.mj_contactForce(m, d, i, self._f)
-            frame = d.contact.frame[i].reshape(3, 3)
-            f = frame.T @ self._f[:3]  # on geom2, world frame
+        for i in rows:
+            mujoco.mj_contactForce(m, d, i, f_c)
+            frame = frames[i].reshape(3, 3)
+            fx, fy, fz = np.matmul(frame.T, f_c[:3], out=f_world).tolist()  # on geom2, world
             # Torsional friction: a torque about the contact normal (frame's first row).
-            tau = self._f[3] * frame[0] if d.contact.dim[i] >= 4 else 0.0
-            sign = -1.0 if geom[i, 0] == self._peg else 1.0
-            rx, ry, rz = (d.contact.pos[i] - tcp).tolist()
-            fx, fy, fz = f.tolist()
-            torque = np.array([ry * fz - rz * fy, rz * fx - rx * fz, rx * fy - ry * fx]) + tau
+            if dims[i] >= 4:
+                t_c = float(f_c[3])
+                nx, ny, nz = frame[0].tolist()
+                tau = (t_c * nx, t_c * ny, t_c * nz)
+            else:
+                tau = (0.0, 0.0, 0.0)
+            sign = -1.0 if geom[i, 0] == peg else 1.0
+            px, py, pz = pos[i].tolist()
+            rx, ry, rz = px - tx, py - ty, pz - tz
+            torque[0] = (ry * fz - rz * fy) + tau[0]
+            torque[1] = (rz * fx - rx * fz) + tau[1]
+            torque[2] = (rx * fy - ry * fx) + tau[2]
             moment += sign * float(np.dot(torque, pinch))
         if self.cell.stiction is not None and self.cell.stiction.stuck:
             # What the pads' stick state carries beyond their contacts' friction.
