@@ -53,6 +53,7 @@ class ArmController:
         self.admittance = Admittance(cfg)
         m, d, ids = cell.model, cell.data, cell.ids
         self.wrench = np.zeros(6)  # tared external wrench at the TCP, world frame
+        self._wrench_f, self._wrench_m = self.wrench[:3], self.wrench[3:]
         self.wrench_sensor = np.zeros(6)  # tared external wrench, sensor frame
         self.compliant = False  # False: the F/T signal does not drive the admittance
         self._scratch = mujoco.MjData(m)
@@ -66,11 +67,14 @@ class ArmController:
         self._ft_xpos = d.site_xpos[ids.ft_site]
         self._ft_xmat = d.site_xmat[ids.ft_site].reshape(3, 3)
         self._s_tcp_xpos = self._scratch.site_xpos[ids.tcp_site]
-        self._s_tcp_xmat = self._scratch.site_xmat[ids.tcp_site].reshape(3, 3)
+        self._s_R_tcp_world = self._scratch.site_xmat[ids.tcp_site].reshape(3, 3).T
+        self._model, self._tcp_site = m, ids.tcp_site
         if ids.ft_torque_adr != ids.ft_force_adr + 3:
             raise ValueError("the F/T force and torque sensors must be adjacent")
         self._raw = d.sensordata[ids.ft_force_adr:ids.ft_force_adr + 6]
+        self._z_world_in_ft = self._ft_xmat[2]  # third row of R_world_ft: world z, ft frame
         self._jac = np.zeros((6, m.nv))  # rows: translation, rotation
+        self._jac_p, self._jac_r = self._jac[:3], self._jac[3:]
         self._J = _block(self._jac.T, ids.arm_dof).T  # a view: follows mj_jacSite's output
         self._JT = self._J.T
         self._err = np.zeros(6)
@@ -87,8 +91,7 @@ class ArmController:
         self.payload_mass = self._tool_mass
         self.payload_com = self._tool_com.copy()
         self._payload_com_t = tuple(self.payload_com.tolist())
-        self._g_tare = np.zeros(6)
-        self._g_now = np.zeros(6)
+        self._g_tare = (0.0,) * 6
         self._compensate = False
 
     def set_payload(self, peg_mass: float) -> None:
@@ -99,18 +102,15 @@ class ArmController:
         self._payload_com_t = tuple(self.payload_com.tolist())
         self.payload_mass = m
 
-    def _gravity_wrench(self, out: np.ndarray) -> np.ndarray:
+    def _gravity_wrench(self) -> tuple[float, float, float, float, float, float]:
         """The payload's weight as an external wrench on the tool, sensor frame:
         ``f = R_world_ft^T (0, 0, -m g)``, ``tau = c x f`` (scalar arithmetic: numpy's
         cross product costs more than the whole sum on 3-vectors)."""
         w = -GRAVITY * self.payload_mass
-        gx, gy, gz = (w * self._ft_xmat[2]).tolist()  # third row of R: world z in the ft frame
+        zx, zy, zz = self._z_world_in_ft.tolist()
+        gx, gy, gz = w * zx, w * zy, w * zz
         cx, cy, cz = self._payload_com_t
-        out[0], out[1], out[2] = gx, gy, gz
-        out[3] = cy * gz - cz * gy
-        out[4] = cz * gx - cx * gz
-        out[5] = cx * gy - cy * gx
-        return out
+        return gx, gy, gz, cy * gz - cz * gy, cz * gx - cx * gz, cx * gy - cy * gx
 
     def tare(self) -> None:
         """Zero the F/T sensor here and compensate the payload's weight from now on.
@@ -124,7 +124,7 @@ class ArmController:
         contact moment.
         """
         self.ft.tare()
-        self._gravity_wrench(self._g_tare)
+        self._g_tare = self._gravity_wrench()
         self._compensate = True
 
     def set_compliant(self, on: bool) -> None:
@@ -148,22 +148,27 @@ class ArmController:
         return self._qpos.copy()
 
     def read_ft(self) -> np.ndarray:
-        """Sample the F/T sensor; update and return the world-frame wrench at the TCP."""
+        """Sample the F/T sensor; update and return the world-frame wrench at the TCP.
+
+        The sensor's wrench, less the change of the payload's weight since the tare
+        (``w - W_g(R) + W_g(R_tare)``), is turned into the world frame by ``R_world_ft`` (numpy's
+        matrix product) and moved from the sensor's origin to the TCP:
+        ``tau_tcp = tau_ft + (p_ft - p_tcp) x f`` (plain floats, rounded as numpy's element-wise
+        operations round)."""
         w = self.ft.sample(self._raw)
         if self._compensate:
-            w -= self._gravity_wrench(self._g_now)
-            w += self._g_tare
+            w[:] = [(wi - gi) + ti for wi, gi, ti in zip(w.tolist(), self._gravity_wrench(),
+                                                        self._g_tare, strict=True)]
         self.wrench_sensor = w
         R_world_ft = self._ft_xmat
         wrench = self.wrench
-        f = wrench[:3]
-        np.matmul(R_world_ft, w[:3], out=f)
-        np.matmul(R_world_ft, w[3:], out=wrench[3:])
-        (r0, r1, r2) = (self._ft_xpos - self._tcp_xpos).tolist()
-        f0, f1, f2 = f.tolist()
-        wrench[3] += r1 * f2 - r2 * f1
-        wrench[4] += r2 * f0 - r0 * f2
-        wrench[5] += r0 * f1 - r1 * f0
+        f0, f1, f2 = np.matmul(R_world_ft, w[:3], out=self._wrench_f).tolist()
+        m0, m1, m2 = np.matmul(R_world_ft, w[3:], out=self._wrench_m).tolist()
+        x0, x1, x2 = self._ft_xpos.tolist()
+        y0, y1, y2 = self._tcp_xpos.tolist()
+        r0, r1, r2 = x0 - y0, x1 - y1, x2 - y2
+        self._wrench_m[:] = (m0 + (r1 * f2 - r2 * f1), m1 + (r2 * f0 - r0 * f2),
+                             m2 + (r0 * f1 - r1 * f0))
         return wrench
 
     # -- commands ---------------------------------------------------------------------------
@@ -173,12 +178,17 @@ class ArmController:
         self.R_ref = np.array(R, dtype=float)
 
     def commanded_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(p_cmd, R_cmd)``: the reference displaced by the compliant offset,
+        ``p_ref + e_p`` and ``exp([e_r]_x) R_ref``."""
         e = self.admittance.offset
-        p = self.p_ref + e[:3]
-        rx, ry, rz = e[3:].tolist()
+        return self.p_ref + e[:3], self._commanded_rotation(*e[3:].tolist())
+
+    def _commanded_rotation(self, rx: float, ry: float, rz: float) -> np.ndarray:
+        """``exp([e_r]_x) R_ref`` for the rotation offset ``e_r = (rx, ry, rz)`` (``R_ref``
+        itself while it is zero, as it is whenever the arm is not compliant)."""
         if rx == 0.0 and ry == 0.0 and rz == 0.0:
-            return p, self.R_ref
-        return p, exp_so3((rx, ry, rz)) @ self.R_ref
+            return self.R_ref
+        return exp_so3((rx, ry, rz)) @ self.R_ref
 
     def absorb_offset(self) -> None:
         """Move the compliant offset into the reference (the commanded pose is unchanged)."""
@@ -191,13 +201,14 @@ class ArmController:
         self.read_ft()
         if self.compliant:
             self.admittance.step(self.wrench, dt)
-        p_cmd, R_cmd = self.commanded_pose()
-        m, sd, site = self.cell.model, self._scratch, self.cell.ids.tcp_site
-        jac, J, JT, err, H, g, dq = (self._jac, self._J, self._JT, self._err, self._H, self._g,
-                                     self._dq)
+        e0, e1, e2, rx, ry, rz = self.admittance.offset.tolist()
+        px, py, pz = self.p_ref.tolist()
+        px, py, pz = px + e0, py + e1, pz + e2  # p_cmd, as numpy's sum rounds
+        R_cmd = self._commanded_rotation(rx, ry, rz)
+        m, sd, site = self._model, self._scratch, self._tcp_site
+        J, JT, err, H, g, dq = self._J, self._JT, self._err, self._H, self._g, self._dq
         step_max = MAX_JOINT_SPEED * dt
         q = self.q_cmd
-        px, py, pz = p_cmd.tolist()
         for k in range(IK_ITERATIONS):
             self._sqpos[:] = q
             mujoco.mj_kinematics(m, sd)
@@ -205,14 +216,14 @@ class ArmController:
                 # Jacobian at the first iterate; the later Newton steps reuse it and its
                 # factorisation (a chord step: |dq| <= pi dt per joint, so J barely changes).
                 mujoco.mj_comPos(m, sd)
-                mujoco.mj_jacSite(m, sd, jac[:3], jac[3:], site)
+                mujoco.mj_jacSite(m, sd, self._jac_p, self._jac_r, site)
                 # Damped least squares: dq = (J^T J + lambda^2 I)^-1 J^T err, Cholesky-factored
                 # (the matrix is symmetric positive definite).
                 np.matmul(JT, J, out=H)
                 H += self._damp
                 mujoco.mju_cholFactor(H, 0.0)
             x, y, z = self._s_tcp_xpos.tolist()
-            np.matmul(R_cmd, self._s_tcp_xmat.T, out=self._Rerr)
+            np.matmul(R_cmd, self._s_R_tcp_world, out=self._Rerr)
             e = (px - x, py - y, pz - z, *log_so3_tuple(self._Rerr))
             err[:] = e
             np.matmul(JT, err, out=g)
