@@ -331,11 +331,14 @@ class ContactPhases:
         tip = p0 + self.estimate.hanging * self.estimate.down_sign * R0[:, 0]
         n = max(1, n_ticks)
         sign = 1.0 if angle >= 0 else -1.0
+        tip_to_tcp = p0 - tip
+        a0, a1, a2 = self.tilt_axis.tolist()
         for k in range(1, n + 1):
             s = k / n
             s = s * s * (3 - 2 * s)
-            Rk = exp_so3(s * angle * self.tilt_axis)
-            robot.arm.set_reference(tip + Rk @ (p0 - tip), Rk @ R0)
+            turn = s * angle
+            Rk = exp_so3((turn * a0, turn * a1, turn * a2))
+            robot.arm.set_reference(tip + Rk @ tip_to_tcp, Rk @ R0)
             robot.tick()
             self._watch()
             if -sign * self._moment() > self.moment_limit:

@@ -55,6 +55,7 @@ class ArmController:
         self.wrench = np.zeros(6)  # tared external wrench at the TCP, world frame
         self._wrench_f, self._wrench_m = self.wrench[:3], self.wrench[3:]
         self.wrench_sensor = np.zeros(6)  # tared external wrench, sensor frame
+        self._sensor_f, self._sensor_m = self.wrench_sensor[:3], self.wrench_sensor[3:]
         self.compliant = False  # False: the F/T signal does not drive the admittance
         self._scratch = mujoco.MjData(m)
         # Views and work arrays reused every tick (numpy's per-call overhead dominates on
@@ -157,13 +158,13 @@ class ArmController:
         operations round)."""
         w = self.ft.sample(self._raw)
         if self._compensate:
-            w[:] = [(wi - gi) + ti for wi, gi, ti in zip(w.tolist(), self._gravity_wrench(),
-                                                        self._g_tare, strict=True)]
-        self.wrench_sensor = w
+            w = [(wi - gi) + ti for wi, gi, ti in zip(w, self._gravity_wrench(), self._g_tare,
+                                                      strict=True)]
+        self.wrench_sensor[:] = w
         R_world_ft = self._ft_xmat
         wrench = self.wrench
-        f0, f1, f2 = np.matmul(R_world_ft, w[:3], out=self._wrench_f).tolist()
-        m0, m1, m2 = np.matmul(R_world_ft, w[3:], out=self._wrench_m).tolist()
+        f0, f1, f2 = np.matmul(R_world_ft, self._sensor_f, out=self._wrench_f).tolist()
+        m0, m1, m2 = np.matmul(R_world_ft, self._sensor_m, out=self._wrench_m).tolist()
         x0, x1, x2 = self._ft_xpos.tolist()
         y0, y1, y2 = self._tcp_xpos.tolist()
         r0, r1, r2 = x0 - y0, x1 - y1, x2 - y2

@@ -111,10 +111,11 @@ class Robot:
         w = log_so3(np.asarray(R) @ R0.T)
         duration = max(np.linalg.norm(dp) / speed, np.linalg.norm(w) / angular_speed, self.dt)
         n = int(math.ceil(duration / self.dt))
+        w0, w1, w2 = w.tolist()
         for k in range(1, n + 1):
             s = k / n
             s = s * s * (3 - 2 * s)  # smoothstep: zero speed at both ends
-            self.arm.set_reference(p0 + s * dp, exp_so3(s * w) @ R0)
+            self.arm.set_reference(p0 + s * dp, exp_so3((s * w0, s * w1, s * w2)) @ R0)
             self.tick()
             if until is not None and until():
                 return True

@@ -21,7 +21,7 @@ def exp_so3(w: np.ndarray) -> np.ndarray:
     Written out on Python floats (with ``K^2 = u u^T - I``, ``u = w / t``): numpy's per-call
     overhead dominates on 3-vectors, and this runs several times per control tick.
     """
-    w0, w1, w2 = w.tolist() if isinstance(w, np.ndarray) else (float(v) for v in w)
+    w0, w1, w2 = w.tolist() if isinstance(w, np.ndarray) else map(float, w)
     theta = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
     if theta < 1e-12:
         return np.array([[1.0, -w2, w1], [w2, 1.0, -w0], [-w1, w0, 1.0]])
