@@ -16,9 +16,10 @@ Prints, for one process pinned to one CPU core:
   tick: the time outside ``mj_step`` and the camera divided by the control ticks (one
   ``mj_step`` call of ``sim.control_decimation`` steps each).
 
-Every figure above is measured twice: with the wall clock and with this process's CPU time. On
-an idle core the two agree; when other processes share the core, the CPU-time figures are what
-an idle core would give, and the wall-clock ones show the slowdown.
+numpy's BLAS runs on one thread (``OPENBLAS_NUM_THREADS=1`` unless set otherwise). Every figure
+above is measured twice: with the wall clock and with this process's CPU time. On an idle core
+the two agree; when other processes share the core, the CPU-time figures are what an idle core
+would give, and the wall-clock ones show the slowdown.
 
 The same episodes then run a second time with a wall-clock timer around each part of the
 control tick, to split the Python per tick (us per tick; the timers' own cost, calibrated on an
@@ -45,27 +46,33 @@ outside ``mj_step`` <= 20 %. Figures only, no assertions.
 
 from __future__ import annotations
 
-import argparse
-import json
 import os
-import platform
-import time
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
-from dataclasses import dataclass, field
-from typing import Any
 
-import mujoco
-import numpy as np
+# One process on one core: without this, numpy's OpenBLAS starts a helper thread on the other
+# core at import; the camera's large matrix product wakes it, it spins for a while after, and
+# its time counts in this process's CPU time (about 5 % of an episode's on a 2-core host).
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-import vgs.assembly.episode
-from vgs.assembly.episode import EpisodeRunner, GraspWatch, center_policy
-from vgs.assembly.strategy import AssemblyModule
-from vgs.config import ExperimentConfig, override, profile
-from vgs.control.arm import ArmController
-from vgs.control.robot import Robot
-from vgs.sim.cell import HOME_Q, Cell
-from vgs.sim.stiction import PadStiction
+import argparse  # noqa: E402
+import json  # noqa: E402
+import platform  # noqa: E402
+import time  # noqa: E402
+from collections.abc import Callable, Iterator  # noqa: E402
+from contextlib import contextmanager  # noqa: E402
+from dataclasses import dataclass, field  # noqa: E402
+from typing import Any  # noqa: E402
+
+import mujoco  # noqa: E402
+import numpy as np  # noqa: E402
+
+import vgs.assembly.episode  # noqa: E402
+from vgs.assembly.episode import EpisodeRunner, GraspWatch, center_policy  # noqa: E402
+from vgs.assembly.strategy import AssemblyModule  # noqa: E402
+from vgs.config import ExperimentConfig, override, profile  # noqa: E402
+from vgs.control.arm import ArmController  # noqa: E402
+from vgs.control.robot import Robot  # noqa: E402
+from vgs.sim.cell import HOME_Q, Cell  # noqa: E402
+from vgs.sim.stiction import PadStiction  # noqa: E402
 
 
 @dataclass

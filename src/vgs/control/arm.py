@@ -158,9 +158,10 @@ class ArmController:
         operations round)."""
         w = self.ft.sample(self._raw)
         if self._compensate:
-            w = [(wi - gi) + ti for wi, gi, ti in zip(w, self._gravity_wrench(), self._g_tare,
-                                                      strict=True)]
-        self.wrench_sensor[:] = w
+            self.wrench_sensor[:] = [(wi - gi) + ti for wi, gi, ti in zip(
+                w.tolist(), self._gravity_wrench(), self._g_tare, strict=True)]
+        else:
+            self.wrench_sensor[:] = w
         R_world_ft = self._ft_xmat
         wrench = self.wrench
         f0, f1, f2 = np.matmul(R_world_ft, self._sensor_f, out=self._wrench_f).tolist()

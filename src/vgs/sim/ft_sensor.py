@@ -21,12 +21,6 @@ NOISE_BLOCK = 256
 class FTSensor:
     """Noisy, filtered, tared wrist F/T sensor.
 
-    Each sample: ``x = raw + sigma n`` (``n`` standard normal per component), the first-order
-    low-pass ``y <- y + alpha (x - y)`` with ``alpha = 1 - exp(-2 pi f_c dt)``, and the tared
-    external wrench ``tare - y``. The six components are Python floats (numpy's per-call
-    overhead on 6-vectors costs more than the arithmetic; each operation rounds as numpy's
-    element-wise version does).
-
     Args:
         cfg: Sensor noise and filter settings.
         dt: Sample period [s] (the controller period).
@@ -41,36 +35,40 @@ class FTSensor:
         wc = 2 * math.pi * cfg.cutoff_hz
         self.alpha = 1.0 if cfg.cutoff_hz <= 0 else 1.0 - math.exp(-wc * dt)
         self.sigma = np.array([cfg.force_noise] * 3 + [cfg.torque_noise] * 3)
-        self._filtered: list[float] | None = None
-        self._tare = (0.0,) * 6
+        self.filtered: np.ndarray | None = None
+        self.tare_offset = np.zeros(6)
+        self._noise = np.zeros(6)  # work arrays, reused every sample
+        self._out = np.zeros(6)
         # Standard normal draws in blocks (one generator call per NOISE_BLOCK samples; the
-        # sequence is the same as drawing six values per sample), scaled by sigma.
+        # sequence is the same as drawing six values per sample).
         self._block = np.zeros((NOISE_BLOCK, 6))
-        self._noise: list[list[float]] = []
         self._next = NOISE_BLOCK
 
-    def sample(self, raw: np.ndarray) -> list[float]:
+    def sample(self, raw: np.ndarray) -> np.ndarray:
         """Feed one raw reading ``(fx, fy, fz, tx, ty, tz)`` and return the tared external wrench
-        in the sensor frame."""
+        in the sensor frame (an array the next call overwrites: copy it to keep it)."""
         if self._next == NOISE_BLOCK:
             self.rng.standard_normal(out=self._block)
-            self._noise = (self._block * self.sigma).tolist()
             self._next = 0
-        noisy = [n + r for n, r in zip(self._noise[self._next], raw.tolist(), strict=True)]
+        noisy = self._noise
+        np.multiply(self._block[self._next], self.sigma, out=noisy)
         self._next += 1
-        if self._filtered is None:
-            self._filtered = noisy
+        noisy += raw
+        if self.filtered is None:
+            self.filtered = noisy.copy()
         else:
-            alpha = self.alpha
-            self._filtered = [y + (x - y) * alpha
-                              for x, y in zip(noisy, self._filtered, strict=True)]
-        return [t - y for t, y in zip(self._tare, self._filtered, strict=True)]
+            noisy -= self.filtered
+            noisy *= self.alpha
+            self.filtered += noisy
+        out = self._out
+        np.subtract(self.tare_offset, self.filtered, out=out)
+        return out
 
     def tare(self) -> None:
         """Zero the sensor at the current (filtered) reading."""
-        if self._filtered is not None:
-            self._tare = tuple(self._filtered)
+        if self.filtered is not None:
+            self.tare_offset = self.filtered.copy()
 
     def raw_filtered(self) -> np.ndarray:
         """The filtered reading before taring (the wrench the flange exerts on the tool)."""
-        return np.zeros(6) if self._filtered is None else np.array(self._filtered)
+        return np.zeros(6) if self.filtered is None else self.filtered.copy()
