@@ -8,14 +8,20 @@
 # stop it, `scripts/carry.sh pack runs/paper_light_s<SEED> docs/results/unfinished/
 # paper_light_s<SEED>.tar.xz`, commit that file; on the next machine this script unpacks it
 # and goes on, and deletes it once the run is published (commit the deletion).
-# Usage: scripts/paper_light.sh SEED
+# The paper's position action is the profile's default; ACTION=rotation runs the rotation action
+# space of visual-pushing-grasping (the published docs/results/paper_light_rotation_s0..s2),
+# into runs/paper_light_rotation_s<SEED>.
+# Usage: [ACTION=position|rotation] scripts/paper_light.sh SEED
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SEED=${1:?usage: scripts/paper_light.sh SEED}
-OUT=runs/paper_light_s$SEED
-CARRY=docs/results/unfinished/paper_light_s$SEED.tar.xz
+ACTION=${ACTION:-position}
+NAME=paper_light_s$SEED
+[ "$ACTION" = position ] || NAME=paper_light_${ACTION}_s$SEED
+OUT=runs/$NAME
+CARRY=docs/results/unfinished/$NAME.tar.xz
 VGS=.venv/bin/vgs
-SET=(--profile paper-light --set "reproduce.train_seeds=($SEED,)")
+SET=(--profile paper-light --set "network.action=$ACTION" --set "reproduce.train_seeds=($SEED,)")
 if [ ! -e "$OUT" ] && [ -f "$CARRY" ]; then
     scripts/carry.sh unpack "$CARRY" "$OUT"
 fi
@@ -23,6 +29,6 @@ fi
 $VGS train --mode baseline "${SET[@]}" --seed "$SEED" --out "$OUT/train/baseline_s$SEED" \
     --no-progress
 $VGS reproduce "${SET[@]}" --out "$OUT" --no-progress
-$VGS report "$OUT" --title "VGS reproduction report (paper-light, seed $SEED)" \
-    --publish "docs/results/paper_light_s$SEED"
+$VGS report "$OUT" --title "VGS reproduction report (paper-light, $ACTION action, seed $SEED)" \
+    --publish "docs/results/$NAME"
 rm -f "$CARRY"

@@ -43,7 +43,7 @@ def test_import_vgs_registers_without_torch_or_mujoco() -> None:
     assert out.stdout.split() == ["False", "False"]
     env = gymnasium.make(vgs.ENV_ID)  # the acceptance line: the paper profile by default
     assert env.unwrapped.cfg.name == "paper"
-    assert env.action_space.nvec.tolist() == [16, 224, 224]
+    assert env.action_space.nvec.tolist() == [1, 224, 224]  # the position action
     env.close()
 
 
@@ -52,7 +52,7 @@ def test_profile_name_condition_and_overrides() -> None:
                          overrides={"cell.peg.mass": 0.6, **SMALL})
     inner = env.unwrapped
     assert inner.cfg.name == "quick" and inner.cfg.cell.peg.mass == 0.6
-    assert env.action_space.nvec.tolist() == [8, 64, 64]
+    assert env.action_space.nvec.tolist() == [1, 64, 64]
     lengths = {env.reset(seed=s)[1]["peg_length_mm"] for s in range(4)}
     nominal = 1000 * inner.cfg.cell.peg.length
     assert len(lengths) == 4 and all(abs(x / nominal - 1) <= 0.15 for x in lengths)

@@ -56,13 +56,18 @@ def heightmap(size: int) -> tuple[np.ndarray, np.ndarray]:
     return color, depth + rng.uniform(0, 0.002, depth.shape).astype(np.float32)
 
 
-@pytest.mark.parametrize(("backbone", "size", "rotations", "rotate"),
-                         [("light", 224, 4, "input"), ("light", 224, 16, "features"),
-                          pytest.param("densenet121", 64, 2, "input", marks=pytest.mark.slow)])
+@pytest.mark.parametrize(("backbone", "size", "rotations", "rotate", "action"),
+                         [("light", 224, 1, "input", "position"),
+                          ("light", 224, 1, "none", "position"),
+                          ("light", 224, 4, "input", "rotation"),
+                          ("light", 224, 16, "features", "rotation"),
+                          pytest.param("densenet121", 64, 2, "input", "rotation",
+                                       marks=pytest.mark.slow)])
 def test_documented_snippet_reproduces_q(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
                                          backbone: str, size: int, rotations: int,
-                                         rotate: str) -> None:
-    cfg = override(profile("smoke"), "network.backbone", backbone)
+                                         rotate: str, action: str) -> None:
+    cfg = override(profile("smoke"), "network.action", action)
+    cfg = override(cfg, "network.backbone", backbone)
     cfg = override(cfg, "network.num_rotations", rotations)
     cfg = override(cfg, "network.rotate", rotate)
     cfg = override(cfg, "cell.camera.size", size)

@@ -19,7 +19,8 @@ from vgs.grasping.agent import (
 )
 from vgs.grasping.replay import ReplayBuffer, Transition
 
-NET = NetworkConfig(backbone="light", num_rotations=4)
+NET = NetworkConfig(
+        action="rotation", backbone="light", num_rotations=4)
 
 
 def _agent(seed: int = 0, **agent_kw: float) -> GraspAgent:
@@ -206,7 +207,8 @@ def test_state_dict_round_trip() -> None:
     # identical next step, momentum buffers included
     t = Transition(color, depth, (1, 5, 6), 0.0)
     assert agent.update(t) == other.update(t)
-    wrong = GraspAgent(NetworkConfig(backbone="light", num_rotations=8), AgentConfig())
+    wrong = GraspAgent(NetworkConfig(
+        action="rotation", backbone="light", num_rotations=8), AgentConfig())
     with pytest.raises(ConfigError):
         wrong.load_state_dict(agent.state_dict())
 
@@ -231,7 +233,8 @@ def test_bfloat16_precision_q_values_and_update() -> None:
     weights), float32 weights after an update, a finite loss."""
     color, depth = _maps(0)
     exact = _agent(seed=3)
-    fast = GraspAgent(NetworkConfig(backbone="light", num_rotations=4, precision="bfloat16"),
+    fast = GraspAgent(NetworkConfig(
+        action="rotation", backbone="light", num_rotations=4, precision="bfloat16"),
                       AgentConfig(), seed=3)
     assert _same(_params(exact.eva_net), _params(fast.eva_net))
     q32, q16 = exact.q_values(color, depth), fast.q_values(color, depth)

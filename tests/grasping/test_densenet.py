@@ -140,6 +140,7 @@ def test_network_loads_weights_into_both_trunks(trunk: DenseNet121Trunk, tmp_pat
     state = _randomised(trunk, 5)
     path = tmp_path / "features.pth"
     torch.save(state, path)
-    net = GraspQNetwork(NetworkConfig(backbone="densenet121", num_rotations=2, weights=str(path)))
+    net = GraspQNetwork(NetworkConfig(
+        action="rotation", backbone="densenet121", num_rotations=2, weights=str(path)))
     for sub in (net.color_trunk, net.depth_trunk):
         torch.testing.assert_close(sub.state_dict()["conv0.weight"], state["conv0.weight"])

@@ -25,7 +25,8 @@ from vgs.grasping.network import (
 
 def _light(num_rotations: int = 4, rotate: str = "input", seed: int = 0) -> GraspQNetwork:
     torch.manual_seed(seed)
-    return GraspQNetwork(NetworkConfig(backbone="light", num_rotations=num_rotations),
+    return GraspQNetwork(NetworkConfig(
+        action="rotation", backbone="light", num_rotations=num_rotations),
                          rotate=rotate).eval()
 
 
@@ -74,7 +75,8 @@ def test_output_shape_light(rotate: str) -> None:
 
 def test_output_shape_densenet() -> None:
     torch.manual_seed(0)
-    net = GraspQNetwork(NetworkConfig(backbone="densenet121", num_rotations=2)).eval()
+    net = GraspQNetwork(NetworkConfig(
+        action="rotation", backbone="densenet121", num_rotations=2)).eval()
     with torch.no_grad():
         q = net(torch.randn(1, 3, 64, 64), torch.randn(1, 3, 64, 64))
     assert q.shape == (1, 2, 64, 64)
@@ -143,7 +145,8 @@ def test_input_checks() -> None:
 
 
 def test_model_info_densenet() -> None:
-    info = model_info(NetworkConfig(backbone="densenet121", num_rotations=16))
+    info = model_info(NetworkConfig(
+        action="rotation", backbone="densenet121", num_rotations=16))
     json.dumps(info)
     p = info["parameters"]
     assert p["color_trunk"] == p["depth_trunk"] == 6_953_856
@@ -158,7 +161,8 @@ def test_model_info_densenet() -> None:
 
 
 def test_model_info_light_features_mode() -> None:
-    info = model_info(NetworkConfig(backbone="light", num_rotations=8), rotate="features", size=64)
+    info = model_info(NetworkConfig(
+        action="rotation", backbone="light", num_rotations=8), rotate="features", size=64)
     assert info["trunk_batch"] == 1
     assert info["padded_size"] == 96
     assert info["feature_shape"] == [1, 256, 12, 12]

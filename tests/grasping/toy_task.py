@@ -6,6 +6,10 @@ apart under every rotation (a uniform bar looks the same turned by 180 degrees, 
 convolutional network could tell its halves apart in rotation k and k + R/2). A grasp pays 1
 when its pixel lies in the marked (left) half of the bar and 0 elsewhere.
 
+With ``turned=True`` the bar lies at a random angle (the position action's task: the network
+sees each map turned by the perceived jaw angle, or as captured, and must find the marked half
+along the bar whatever its orientation).
+
 Training follows the project's loop in miniature: every episode draws a new scene, explores with
 epsilon = 1 on the bar (random pixel, random rotation), takes one update on the new transition
 (y = r, terminal), stores it in the prioritised replay buffer with its Delta Q, and takes one
@@ -36,6 +40,24 @@ class Scene:
     paying: np.ndarray  # bool (S, S): pixels that pay 1
 
 
+def make_turned_scene(rng: np.random.Generator, size: int = SIZE) -> Scene:
+    """A bar like :func:`make_scene`'s at a uniformly random angle and position."""
+    h, w = size // 4, size // 2
+    phi = float(rng.uniform(0.0, 2.0 * np.pi))
+    margin = 0.5 * np.hypot(h, w) + 1.0
+    cr, cc = rng.uniform(margin, size - margin, 2)
+    rows, cols = np.mgrid[0:size, 0:size] + 0.5
+    u = (cols - cc) * np.cos(phi) + (rows - cr) * np.sin(phi)  # along the bar
+    v = -(cols - cc) * np.sin(phi) + (rows - cr) * np.cos(phi)  # across it
+    bar = (np.abs(u) < w / 2) & (np.abs(v) < h / 2)
+    color = np.full((size, size, 3), 40, np.uint8)
+    depth = np.zeros((size, size), np.float32)
+    color[bar] = 180
+    color[bar & (u < -w / 2 + 3)] = (220, 30, 30)
+    depth[bar] = 0.03
+    return Scene(color, depth, bar & (u < 0))
+
+
 def make_scene(rng: np.random.Generator, size: int = SIZE) -> Scene:
     h, w = size // 4, size // 2
     r = int(rng.integers(2, size - h - 2))
@@ -56,14 +78,20 @@ def train_toy(
     episodes: int = EPISODES,
     seed: int = 1,
     precision: str = "float32",
+    action: str = "rotation",
+    rotate: str = "input",
 ) -> tuple[GraspAgent, np.random.Generator]:
     """Train a light-backbone agent on the toy task; ``flip`` pays the other half instead.
 
-    ``learning_rate = 0`` (a broken learner) keeps the SGD step at zero; AgentConfig itself
-    only accepts positive rates, so the optimiser's rate is zeroed after construction.
+    ``action = "position"`` trains the paper's action on turned bars (:func:`make_turned_scene`)
+    with the network's input turned by the perceived jaw angle (``rotate="input"``) or as
+    captured (``"none"``). ``learning_rate = 0`` (a broken learner) keeps the SGD step at zero;
+    AgentConfig itself only accepts positive rates, so the optimiser's rate is zeroed after
+    construction.
     """
     agent = GraspAgent(
-        NetworkConfig(backbone="light", num_rotations=ROTATIONS, precision=precision),
+        NetworkConfig(action=action, backbone="light", num_rotations=ROTATIONS,
+                      rotate=rotate, precision=precision),
         AgentConfig(learning_rate=learning_rate or 1e-4, target_update_period=10,
                     replay_batch=1),
         seed=seed,
@@ -73,8 +101,9 @@ def train_toy(
             group["lr"] = 0.0
     rng = np.random.default_rng(seed)
     buffer = ReplayBuffer(episodes)
+    draw = make_turned_scene if action == "position" else make_scene
     for _ in range(episodes):
-        scene = make_scene(rng)
+        scene = draw(rng)
         action = agent.act(
             scene.color, scene.depth, 1.0, peg_mask(scene.depth), rng, skip_q_if_exploring=True
         )
@@ -99,8 +128,9 @@ class ToyScore:
 def score(agent: GraspAgent, rng: np.random.Generator, trials: int = 20) -> ToyScore:
     """Greedy grasps (epsilon = 0, restricted to the bar) on fresh scenes."""
     hits, q_pay, q_other = 0, [], []
+    draw = make_turned_scene if agent.position_action else make_scene
     for _ in range(trials):
-        scene = make_scene(rng)
+        scene = draw(rng)
         mask = peg_mask(scene.depth)
         action = agent.act(scene.color, scene.depth, 0.0, mask, rng)
         hits += int(scene.paying[action.row, action.col])

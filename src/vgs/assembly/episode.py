@@ -21,10 +21,9 @@ from vgs.config import ExperimentConfig, PegConfig
 from vgs.control.robot import Robot
 from vgs.control.transforms import tilt_angle
 from vgs.errors import SimulationError
+from vgs.perception import MIN_PEG_PIXELS, PEG_PIXEL_HEIGHT, principal_axis
 from vgs.sim.camera import Heightmap, RayCastCamera
 from vgs.sim.cell import Cell
-
-PEG_PIXEL_HEIGHT = 0.005  # heightmap cells higher than this belong to the object [m]
 
 
 @dataclass(frozen=True)
@@ -42,23 +41,18 @@ Policy = Callable[[Heightmap], GraspCommand]
 def peg_axis_from_heightmap(hm: Heightmap) -> tuple[np.ndarray, np.ndarray, float]:
     """Centroid (world x, y), unit axis and visible length of the object in the heightmap.
 
-    The principal axis of the object pixels (height > 5 mm) is the peg's axis; its extent along
-    the axis is the visible length.
+    The principal axis of the object pixels (height > 5 mm) in world coordinates is the peg's
+    axis; its extent along the axis is the visible length (:mod:`vgs.perception`).
 
     Raises:
         SimulationError: If no object is visible.
     """
     rows, cols = np.nonzero(hm.depth > PEG_PIXEL_HEIGHT)
-    if rows.size < 10:
+    if rows.size < MIN_PEG_PIXELS:
         raise SimulationError("no object in the heightmap")
     xs, ys = hm.pixel_to_world(rows, cols)
-    pts = np.stack([xs, ys], axis=1)
-    center = pts.mean(axis=0)
-    cov = np.cov((pts - center).T)
-    evals, evecs = np.linalg.eigh(cov)
-    axis = evecs[:, int(np.argmax(evals))]
-    proj = (pts - center) @ axis
-    return center, axis, float(proj.max() - proj.min() + hm.pixel_size)
+    center, axis, extent = principal_axis(np.stack([xs, ys], axis=1))
+    return center, axis, extent + hm.pixel_size
 
 
 def jaw_misalignment_deg(yaw: float, R_world_peg: np.ndarray) -> float:

@@ -35,6 +35,7 @@ from vgs.config.experiment import (
     profile,
 )
 from vgs.config.learning import (
+    ACTIONS,
     BACKBONES,
     PRECISIONS,
     ROTATE_MODES,
@@ -46,7 +47,7 @@ from vgs.config.learning import (
 from vgs.config.tree import NO_SUCH_FIELD, from_dict, override, same_config, to_dict
 
 __all__ = [
-    "BACKBONES", "CONDITIONS", "NO_SUCH_FIELD", "PRECISIONS", "PROFILES", "ROTATE_MODES",
+    "ACTIONS", "BACKBONES", "CONDITIONS", "NO_SUCH_FIELD", "PRECISIONS", "PROFILES", "ROTATE_MODES",
     "AgentConfig", "AssemblyConfig", "CameraConfig", "CellConfig", "ControllerConfig",
     "EvalConfig", "ExperimentConfig", "FTSensorConfig", "GripperConfig", "HoleConfig",
     "NetworkConfig", "PegConfig", "ReproduceConfig", "RewardConfig", "SimConfig", "TrainConfig",

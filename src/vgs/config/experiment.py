@@ -134,17 +134,16 @@ def _medium() -> ExperimentConfig:
 
 
 def _paper_light() -> ExperimentConfig:
-    # The paper's protocol (5000 grasps per policy, the first 1000 random, R = 16, 1000 tests
-    # per policy and condition) sized for a 2-core CPU (issue 18): the light backbone, its
-    # heightmaps rotated R times before the trunks as in the paper and VPG (the cheaper
-    # rotate="features", one trunk pass per decision, did not learn the jaw angle: benchmarks/
-    # probe_offline_rotate.py, docs/training.md), the baseline's training grasps without the
-    # assembly its reward does not use, VGS's training assemblies stopped at the frozen reward
+    # The paper's protocol (5000 grasps per policy, the first 1000 random, 1000 tests per policy
+    # and condition) sized for a 2-core CPU: the paper's position action (the network picks a
+    # pixel; the jaws close across the perceived peg axis, the heightmap turned once into the
+    # jaws' frame), the light backbone, the baseline's training grasps without the assembly
+    # its reward does not use, VGS's training assemblies stopped at the frozen reward
     # threshold (the same rewards either way), two parallel training episodes per run, the
-    # network's forward passes in bfloat16 (2.1x faster decisions on a CPU with bfloat16 units;
-    # the offline probe learns the jaw angle as in float32: docs/training.md), and the
-    # reference policy and the sweep left to their own commands (`vgs evaluate --policy
-    # center`, `vgs sweep`).
+    # network's forward passes in bfloat16 (2.1x faster on a CPU with bfloat16 units;
+    # docs/training.md), and the reference policy and the sweep left to their own commands
+    # (`vgs evaluate --policy center`, `vgs sweep`). `--set network.action=rotation` runs the
+    # rotation action space of visual-pushing-grasping (R = 16) instead.
     return ExperimentConfig(
         name="paper-light",
         network=NetworkConfig(backbone="light", num_rotations=16, precision="bfloat16"),

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 from vgs.config.checks import _fraction, _non_negative, _positive
 from vgs.errors import ConfigError
 
 BACKBONES = ("densenet121", "light")
-ROTATE_MODES = ("input", "features")
+ACTIONS = ("position", "rotation")
+ROTATE_MODES = ("input", "features", "none")
 PRECISIONS = ("float32", "bfloat16")
 
 
@@ -17,13 +19,21 @@ class NetworkConfig:
     """Fully convolutional grasp Q network (paper 3.1).
 
     Attributes:
+        action: ``position`` (the paper's action: a pixel of one H x W Q map; the jaws close
+            across the peg's axis as perceived in the same heightmap,
+            :func:`vgs.grasping.actions.perceived_jaw_angle`) or ``rotation`` (the action space
+            of visual-pushing-grasping, which the paper does not mention: a pixel and one of R
+            jaw angles, R Q maps; the policy learns the jaw angle as well).
         backbone: ``densenet121`` (paper) or ``light`` (fast CPU runs).
         num_rotations: Number of grasp orientations R over 360 degrees, theta_k = 2 pi k / R
-            (k and k + R/2 are the same two-finger grasp).
+            (k and k + R/2 are the same two-finger grasp); the ``rotation`` action only.
         weights: Optional path of a local weights file for the trunks.
-        rotate: ``input`` (rotate the heightmap R times before the trunks, as VPG and the paper
-            do) or ``features`` (trunks run once, orientation handled after them; about 14x
-            faster decisions with DenseNet-121 on a CPU, see docs/grasping.md; not in the paper).
+        rotate: How the network sees the jaw angle. ``position`` action: ``input`` (the
+            heightmap turned once into the jaws' frame by the perceived angle before the
+            trunks) or ``none`` (the heightmap as captured). ``rotation`` action: ``input``
+            (the heightmap turned R times before the trunks, as VPG does) or ``features``
+            (trunks run once, the head conditioned on the angle; faster, not in VPG, and it
+            did not learn the jaw angle: docs/training.md).
         depth_mean: Mean subtracted from the depth heightmap [m].
         depth_std: Scale dividing the depth heightmap [m].
         precision: ``float32`` (default) or ``bfloat16``: the forward passes (decisions, TD
@@ -34,6 +44,10 @@ class NetworkConfig:
             under either.
     """
 
+    # Configurations recorded before ``action`` existed (2026-12-05) used the rotation action.
+    RECORDED_BEFORE: ClassVar[dict[str, str]] = {"action": "rotation"}
+
+    action: str = "position"
     backbone: str = "densenet121"
     num_rotations: int = 16
     weights: str | None = None
@@ -48,13 +62,22 @@ class NetworkConfig:
                               f"must be one of {BACKBONES}, got {self.backbone!r}")
         if self.num_rotations < 1:
             raise ConfigError("network.num_rotations", "must be >= 1")
-        if self.rotate not in ROTATE_MODES:
-            raise ConfigError("network.rotate",
-                              f"must be one of {ROTATE_MODES}, got {self.rotate!r}")
+        if self.action not in ACTIONS:
+            raise ConfigError("network.action", f"must be one of {ACTIONS}, got {self.action!r}")
+        allowed = ("input", "none") if self.action == "position" else ("input", "features")
+        if self.rotate not in allowed:
+            raise ConfigError("network.rotate", f"must be one of {allowed} with the "
+                                                f"{self.action} action, got {self.rotate!r}")
         if self.precision not in PRECISIONS:
             raise ConfigError("network.precision",
                               f"must be one of {PRECISIONS}, got {self.precision!r}")
         _positive(self, "depth_std", prefix="network.")
+
+    @property
+    def q_maps(self) -> int:
+        """Q maps the network outputs per heightmap: 1 for the position action, R for the
+        rotation action."""
+        return 1 if self.action == "position" else self.num_rotations
 
 
 @dataclass(frozen=True)

@@ -42,10 +42,18 @@ def to_dict(cfg: Any) -> dict[str, Any]:
 
 
 def from_dict(cls: type, data: dict[str, Any]) -> Any:
-    """Rebuild a nested frozen dataclass from :func:`to_dict` output."""
+    """Rebuild a nested frozen dataclass from :func:`to_dict` output.
+
+    A field the data lacks takes its default, except where the class names in its
+    ``RECORDED_BEFORE`` mapping the value that configurations recorded before the field existed
+    were made with (a changed default must not change what an old run folder describes).
+    """
     kwargs = {}
+    legacy: dict[str, Any] = getattr(cls, "RECORDED_BEFORE", {})
     for f in fields(cls):
         if f.name not in data:
+            if f.name in legacy:
+                kwargs[f.name] = legacy[f.name]
             continue
         value = data[f.name]
         namespace = vars(sys.modules[cls.__module__])  # where cls's annotations are names

@@ -11,11 +11,13 @@ Observation (``Dict``), the overhead camera's heightmaps as images (H = W =
   (0.5 mm; 0-127.5 mm, the lying peg is 30 mm high). The full-precision heightmap is
   ``env.unwrapped.heightmap``.
 
-Action (``MultiDiscrete([R, H, W])``): ``(rotation k, row i, col j)`` as the grasp network
-outputs it; pixel (i, j) is the grasp point and theta_k = 2 pi k / R the closing direction
-(R = ``network.num_rotations``). ``info["action_mask"]`` (bool (H, W)) marks the pixels on
-the peg, where the agent of the paper grasps; an action elsewhere grasps at the table and fails.
-The mask is the same for every rotation.
+Action (``MultiDiscrete([n, H, W])``): ``(map k, row i, col j)`` as the grasp network outputs
+it; pixel (i, j) is the grasp point. With ``network.action = "position"`` (the paper's, the
+default) n = 1, k = 0 and the jaws close across the peg's axis as perceived in the same
+heightmap; with ``"rotation"`` n = R = ``network.num_rotations`` and theta_k = 2 pi k / R is the
+closing direction. ``info["action_mask"]`` (bool (H, W)) marks the pixels on the peg, where the
+agent of the paper grasps; an action elsewhere grasps at the table and fails. The mask is the
+same for every map.
 
 Reward: paper eq. 5 with training's code (:func:`vgs.grasping.rewards.episode_reward`):
 ``r_G`` for a successful grasp plus, in ``vgs`` mode, ``r_AM`` when the assembly succeeded
@@ -53,8 +55,8 @@ from vgs.assembly.episode import EpisodeRunner
 from vgs.config import CONDITIONS, ExperimentConfig, PegConfig, override, profile
 from vgs.errors import ConfigError
 from vgs.experiments.evaluate import condition_peg
-from vgs.experiments.policies import pixel_command
-from vgs.grasping.actions import peg_mask, rotation_angle
+from vgs.experiments.policies import action_angle, pixel_command
+from vgs.grasping.actions import peg_mask
 from vgs.grasping.rewards import MODES, episode_reward, next_threshold
 from vgs.sim.camera import Heightmap
 
@@ -139,7 +141,7 @@ class GraspAssembleEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             "color": spaces.Box(0, 255, (size, size, 3), np.uint8),
             "depth": spaces.Box(0, 255, (size, size, 1), np.uint8),
         })
-        self.action_space = spaces.MultiDiscrete([cfg.network.num_rotations, size, size])
+        self.action_space = spaces.MultiDiscrete([cfg.network.q_maps, size, size])
         self.runner = EpisodeRunner(cfg)
         self.threshold_s: float | None = cfg.reward.threshold_s
         self.episodes = 0
@@ -180,7 +182,7 @@ class GraspAssembleEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         k, row, col = (int(a) for a in np.asarray(action).reshape(3))
         if not self.action_space.contains(np.array([k, row, col], dtype=np.int64)):
             raise ConfigError("action", f"{(k, row, col)} is outside {self.action_space}")
-        command = pixel_command(hm, row, col, rotation_angle(k, self.cfg.network.num_rotations))
+        command = pixel_command(hm, row, col, action_angle(self.cfg.network, k, hm.depth))
         record, _, _ = self.runner.run(self._seed, lambda _hm: command, peg=self._peg)
         time_ok = record.assembly_time if record.success else None
         exploring = self.episodes < self.cfg.agent.random_episodes

@@ -99,6 +99,25 @@ def layer_ops(module: nn.Module, prefix: str) -> list[list[Any]]:
     return ops
 
 
+TURN = ("images turn by theta about their centre with affine_grid [[cos, -sin, 0], "
+        "[sin, cos, 0]] and bilinear grid_sample (align_corners=False, zeros outside); Q maps "
+        "turn back by -theta")
+
+
+def _rotation_text(net: GraspQNetwork) -> str:
+    """How the input turns, in words, for each action and rotate mode."""
+    if net.action == "position":
+        perceived = ("theta = atan2(a_row, a_col) + pi/2, a the principal axis (largest "
+                     "eigenvector of the covariance) of the (col, row) coordinates of the "
+                     "pixels higher than 5 mm: the jaws close across the peg; ")
+        return perceived + (TURN if net.rotate == "input" else "nothing turns")
+    if net.rotate == "input":
+        return "theta_k = 2 pi k / R; " + TURN.replace("theta", "theta_k")
+    return ("theta_k = 2 pi k / R; nothing turns: the trunks see the unrotated input once, and "
+            "the head's 'angle' op appends (cos theta_k, sin theta_k, cos 2 theta_k, "
+            "sin 2 theta_k) as constant channels")
+
+
 def describe(net: GraspQNetwork, size: int, pixel_size: float,
              extra: dict[str, Any]) -> dict[str, Any]:
     """The JSON description of ``net`` for H = W = ``size`` heightmaps."""
@@ -109,6 +128,7 @@ def describe(net: GraspQNetwork, size: int, pixel_size: float,
     return {
         "format": FORMAT,
         **extra,
+        "action": cfg.action,
         "backbone": cfg.backbone,
         "num_rotations": net.num_rotations,
         "rotate": net.rotate,
@@ -121,15 +141,12 @@ def describe(net: GraspQNetwork, size: int, pixel_size: float,
         "input_mean": [*IMAGENET_MEAN, cfg.depth_mean],
         "input_std": [*IMAGENET_STD, cfg.depth_std],
         "padded_size": padded_size(size, size),
-        "rotation": "theta_k = 2 pi k / R; images turn by theta_k about their centre with "
-                    "affine_grid [[cos, -sin, 0], [sin, cos, 0]] and bilinear grid_sample "
-                    "(align_corners=False, zeros outside); Q maps turn back by -theta_k"
-        if net.rotate == "input" else
-        "theta_k = 2 pi k / R; nothing turns: the trunks see the unrotated input once, and "
-        "the head's 'angle' op appends (cos theta_k, sin theta_k, cos 2 theta_k, "
-        "sin 2 theta_k) as constant channels",
-        "output": "Q (R, H, W): Q[k, i, j] is the value of closing the jaws at pixel (i, j) "
-                  "along (d_col, d_row) = (cos theta_k, sin theta_k)",
+        "rotation": _rotation_text(net),
+        "output": "Q (1, H, W): Q[0, i, j] is the value of closing the jaws at pixel (i, j) "
+                  "across the peg's perceived axis, along (cos theta, sin theta)"
+        if net.action == "position" else
+        "Q (R, H, W): Q[k, i, j] is the value of closing the jaws at pixel (i, j) "
+        "along (d_col, d_row) = (cos theta_k, sin theta_k)",
         "color_trunk": layer_ops(net.color_trunk, "color_trunk"),
         "depth_trunk": layer_ops(net.depth_trunk, "depth_trunk"),
         "head": head,

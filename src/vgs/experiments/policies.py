@@ -3,8 +3,9 @@
 A policy spec is one of
 
 * ``center``: the heuristic grasp at the centre of the visible peg, pads along its axis;
-* ``random``: a uniformly random pixel on the peg and a uniformly random rotation out of the
-  network's R (what the agent does while exploring);
+* ``random``: a uniformly random pixel on the peg, the jaws across its perceived axis (the
+  position action) or at a uniformly random rotation out of the network's R (the rotation
+  action): what the agent does while exploring;
 * a training run folder (``run.json`` and ``checkpoint.pt`` from ``vgs train``): the trained
   evaluation network Q_eva acting greedily, ``argmax_(k,i,j) Q(k, i, j)`` over the peg pixels;
 * a policy folder (``run.json``, ``policy.pt`` and ``policy.json``, as ``vgs export-policy RUN
@@ -29,9 +30,9 @@ from typing import Any, Protocol
 import numpy as np
 
 from vgs.assembly.episode import GraspCommand, center_policy
-from vgs.config import ExperimentConfig, from_dict
+from vgs.config import ExperimentConfig, NetworkConfig, from_dict
 from vgs.errors import ConfigError, CorruptFileError
-from vgs.grasping.actions import peg_mask, rotation_angle
+from vgs.grasping.actions import peg_mask, perceived_jaw_angle, rotation_angle
 from vgs.sim.camera import Heightmap
 
 HEURISTICS = ("center", "random")
@@ -66,6 +67,15 @@ def pads_heading(angle: float) -> float:
     return angle - math.pi / 2
 
 
+def action_angle(network: NetworkConfig, rotation: int, depth: np.ndarray) -> float:
+    """Closing direction [rad] of an action's jaws in pixel axes: across the peg's perceived
+    axis for the position action (:func:`vgs.grasping.actions.perceived_jaw_angle`), theta_k
+    of rotation k for the rotation action."""
+    if network.action == "position":
+        return perceived_jaw_angle(depth)
+    return rotation_angle(rotation, network.num_rotations)
+
+
 def pixel_command(hm: Heightmap, row: int, col: int, angle: float) -> GraspCommand:
     """World grasp of pixel (row, col) closing along ``(cos angle, sin angle)``
     (:func:`pads_heading`)."""
@@ -85,9 +95,10 @@ class CenterPolicy:
 
 @dataclass
 class RandomPolicy:
-    """A uniformly random peg pixel and rotation (the agent's exploration draw)."""
+    """A uniformly random peg pixel (and rotation, for the rotation action): the agent's
+    exploration draw."""
 
-    num_rotations: int
+    network: NetworkConfig
     label: str = "random"
 
     def __call__(self, hm: Heightmap, rng: np.random.Generator) -> Decision:
@@ -96,9 +107,10 @@ class RandomPolicy:
             mask = np.ones_like(mask)
         rows, cols = np.nonzero(mask)
         pick = int(rng.integers(rows.size))
-        k = int(rng.integers(self.num_rotations))
+        position = self.network.action == "position"
+        k = 0 if position else int(rng.integers(self.network.num_rotations))
         i, j = int(rows[pick]), int(cols[pick])
-        angle = rotation_angle(k, self.num_rotations)
+        angle = action_angle(self.network, k, hm.depth)
         return Decision(pixel_command(hm, i, j, angle), rotation=k, row=i, col=j)
 
 
@@ -187,8 +199,9 @@ def _load_policy_files(folder: Path, meta: dict[str, Any], agent: Any, device: s
         raise CorruptFileError(desc_path, f"is not a {POLICY_FORMAT} description with "
                                           "trained_episodes")
     for key, mine in (("mode", meta.get("mode")), ("backbone", agent.network_cfg.backbone),
+                      ("action", agent.network_cfg.action),
                       ("num_rotations", agent.num_rotations), ("rotate", agent.rotate)):
-        if desc.get(key) != mine:
+        if desc.get(key, "rotation" if key == "action" else None) != mine:
             raise CorruptFileError(desc_path, f"describes a network with {key} "
                                               f"{desc.get(key)!r}, run.json one with {mine!r}")
     try:
@@ -254,7 +267,7 @@ def load_policy(spec: str, cfg: ExperimentConfig, device: str = "cpu") -> EvalPo
     if spec == "center":
         return CenterPolicy()
     if spec == "random":
-        return RandomPolicy(cfg.network.num_rotations)
+        return RandomPolicy(cfg.network)
     if is_run_dir(spec):
         return GreedyPolicy(Path(spec), device)
     if ":" in spec and not Path(spec).exists():

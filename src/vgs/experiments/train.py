@@ -4,8 +4,10 @@ The loop reads top to bottom; one iteration is one episode:
 
 1. the cell is reset with the episode's seed (``SeedSequence([seed, episode])``) and the camera
    gives the heightmap s;
-2. the agent picks (rotation k, row i, col j) epsilon-greedily (random pixel on the peg while
-   exploring); the pixel becomes the world grasp point and theta_k the closing direction;
+2. the agent picks a pixel (i, j) epsilon-greedily (a random pixel on the peg while
+   exploring); the pixel becomes the world grasp point, and the jaws close across the peg's
+   axis as perceived in the heightmap (``network.action = "position"``, the paper's) or along
+   theta_k of a chosen rotation k (``"rotation"``);
 3. the grasp primitive and the assembly module run; the episode record comes back (the
    baseline skips the assembly with ``train.assemble_baseline`` off, and VGS stops it at the
    frozen threshold with ``train.stop_at_threshold``: neither changes a reward);

@@ -28,13 +28,15 @@ from vgs.runfolder import check_request, host, read_json
 CSV_COLUMNS = (
     "episode", "mode", "seed", "epsilon", "explored", "rotation", "row", "col", "q_value",
     "grasp_success", "grasp_offset_mm", "jaw_misalignment_deg", "assembly_success",
-    "assembly_time_s", "adjustments", "failure_reason", "r_grasp", "r_assembly", "reward", "threshold_s", "loss", "delta_q",
+    "assembly_time_s", "adjustments", "failure_reason", "r_grasp", "r_assembly", "reward",
+    "threshold_s", "loss", "delta_q",
     "wall_s",
 )
 
 
+# from EpisodeRecord.to_row()
 RECORD_COLUMNS = ("grasp_success", "grasp_offset_mm", "jaw_misalignment_deg",
-                  "assembly_success", "assembly_time_s", "adjustments", "failure_reason")  # from EpisodeRecord.to_row()
+                  "assembly_success", "assembly_time_s", "adjustments", "failure_reason")
 
 
 def episode_seed(root: int, episode: int) -> int:

@@ -1,9 +1,12 @@
-"""The pixel-wise action space without torch: rotation angles, jaw axes and the peg mask.
+"""The pixel-wise action spaces without torch: jaw angles and the peg mask.
 
-A grasp action is a pixel (row, col) of the heightmap and a rotation index ``k`` of ``R``; the
-jaws close along ``theta_k = 2 pi k / R`` measured in pixel axes (column right, row down). These
-helpers are kept free of torch so that processes which only run heuristic policies (evaluation
-workers of the centre and random policies) start without importing it.
+``network.action = "position"`` (the paper's): a grasp action is a pixel (row, col) of the
+heightmap; the jaws close across the peg's axis as the robot perceives it in the same heightmap,
+along :func:`perceived_jaw_angle`. ``"rotation"`` (visual-pushing-grasping's): a pixel and a
+rotation index ``k`` of ``R``; the jaws close along ``theta_k = 2 pi k / R``. Angles are
+measured in pixel axes (column right, row down), which are world (x, y). These helpers are kept
+free of torch so that processes which only run heuristic policies (evaluation workers of the
+centre and random policies) start without importing it.
 """
 
 from __future__ import annotations
@@ -13,6 +16,7 @@ import math
 import numpy as np
 
 from vgs.errors import ConfigError
+from vgs.perception import MIN_PEG_PIXELS, PEG_PIXEL_HEIGHT, principal_axis
 
 
 def rotation_angle(k: int, num_rotations: int) -> float:
@@ -49,7 +53,28 @@ def check_depth(depth: np.ndarray) -> None:
         raise ConfigError("heightmap.depth", "contains NaN or infinite heights")
 
 
-def peg_mask(depth: np.ndarray, min_height: float = 0.005) -> np.ndarray:
+def perceived_jaw_angle(depth: np.ndarray) -> float:
+    """Closing direction of jaws that close across the peg's perceived axis [rad].
+
+    The peg's axis ``a = (a_col, a_row)`` is the principal axis of the object pixels
+    (:func:`vgs.perception.principal_axis`, the perception of the centre heuristic, here in
+    pixel units); the jaws close perpendicular to it,
+
+        theta = atan2(a_row, a_col) + pi / 2,
+
+    in pixel axes, which are world (x, y). ``0`` when fewer than 10 pixels show an object.
+    The angle depends on the heightmap alone, so the decision and every later replay of the
+    same map turn the network's input alike.
+    """
+    check_depth(depth)
+    rows, cols = np.nonzero(depth > PEG_PIXEL_HEIGHT)
+    if rows.size < MIN_PEG_PIXELS:
+        return 0.0
+    _, axis, _ = principal_axis(np.stack([cols, rows], axis=1).astype(np.float64))
+    return math.atan2(float(axis[1]), float(axis[0])) + math.pi / 2
+
+
+def peg_mask(depth: np.ndarray, min_height: float = PEG_PIXEL_HEIGHT) -> np.ndarray:
     """Pixels on the object: height above the table strictly greater than ``min_height``.
 
     Args:

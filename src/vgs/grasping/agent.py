@@ -30,6 +30,13 @@ before the step.
 **BatchNorm.** Actions and TD targets use eval mode (running statistics); the update's forward
 pass uses train mode (batch statistics over the one or two rotated copies).
 
+**Action spaces.** With ``network.action = "position"`` (the paper's) an action is a pixel
+(i, j) of one Q map; the jaws close across the peg's axis as perceived in the same heightmap
+(:func:`vgs.grasping.actions.perceived_jaw_angle`), a function of the map alone, so the
+decision, the update and every replay turn the network's input (``rotate="input"``) by the same
+angle. Its action is stored as (0, i, j) and its loss falls on that one pixel. With
+``"rotation"`` (visual-pushing-grasping's) an action is (k, i, j) as above.
+
 **Exploration.** Episodes e < N_random (``random_episodes``) act at random (epsilon = 1); after
 that epsilon anneals linearly from epsilon_start to epsilon_end over the remaining episodes:
 
@@ -37,8 +44,8 @@ that epsilon anneals linearly from epsilon_start to epsilon_end over the remaini
     D = max(1, E - N_random - 1),
 
 with E the total number of episodes. An exploratory action picks a uniformly random valid pixel
-and a uniformly random rotation; a greedy one the argmax of Q over (R, H, W) restricted to valid
-pixels.
+(and, for the rotation action, a uniformly random rotation); a greedy one the argmax of Q over
+the maps and pixels, restricted to valid pixels.
 """
 
 from __future__ import annotations
@@ -55,6 +62,7 @@ from torch import Tensor
 
 from vgs.config import AgentConfig, NetworkConfig, to_dict
 from vgs.errors import ConfigError
+from vgs.grasping.actions import perceived_jaw_angle
 from vgs.grasping.dqn import DeltaQMonitor, epsilon_schedule, opposite_rotation, td_loss
 from vgs.grasping.network import GraspQNetwork, rotation_angle
 from vgs.grasping.preprocess import check_heightmaps, preprocess
@@ -66,10 +74,11 @@ class GraspAction:
     """A chosen grasp.
 
     Attributes:
-        rotation: Rotation index k in [0, R).
+        rotation: Rotation index k in [0, R) (rotation action); 0 for the position action.
         row: Pixel row i.
         col: Pixel column j.
-        angle: theta_k = 2 pi k / R [rad].
+        angle: Closing direction of the jaws in pixel axes [rad]: theta_k = 2 pi k / R
+            (rotation action) or the perceived angle across the peg (position action).
         q_value: Q_eva(s, (k, i, j)) (NaN if the forward pass was skipped).
         explored: True if chosen at random (epsilon branch).
         q_map: The whole Q map (R, H, W) of the evaluation network in eval mode, or None if
@@ -151,8 +160,17 @@ class GraspAgent:
 
     @property
     def num_rotations(self) -> int:
-        """R."""
-        return self.network_cfg.num_rotations
+        """Q maps per heightmap: R (rotation action) or 1 (position action)."""
+        return self.network_cfg.q_maps
+
+    @property
+    def position_action(self) -> bool:
+        """Whether the action is the paper's position alone (``network.action``)."""
+        return self.network_cfg.action == "position"
+
+    def _turn(self, depth: np.ndarray) -> list[float] | None:
+        """The position action's input turn, the perceived closing angle, for one map."""
+        return [perceived_jaw_angle(depth)] if self.position_action else None
 
     def _inputs(self, color: np.ndarray, depth: np.ndarray) -> tuple[Tensor, Tensor]:
         c, d = preprocess(color, depth, self.network_cfg)
@@ -172,7 +190,7 @@ class GraspAgent:
         was_training = net.training
         net.eval()
         with torch.inference_mode(), self._autocast():
-            q = net(c, d)[0].float().cpu().numpy()
+            q = net(c, d, angles=self._turn(depth))[0].float().cpu().numpy()
         net.train(was_training)
         return q
 
@@ -192,9 +210,10 @@ class GraspAgent:
     ) -> GraspAction:
         """Epsilon-greedy grasp.
 
-        With probability epsilon: a uniformly random valid pixel and rotation. Otherwise the
-        argmax of Q_eva over (R, H, W), restricted to pixels where ``valid_mask`` is True when
-        the mask has any True pixel (an empty or absent mask allows every pixel).
+        With probability epsilon: a uniformly random valid pixel (and rotation, for the
+        rotation action). Otherwise the argmax of Q_eva over its maps and pixels, restricted
+        to pixels where ``valid_mask`` is True when the mask has any True pixel (an empty or
+        absent mask allows every pixel).
 
         Args:
             color: RGB heightmap, uint8 (H, W, 3).
@@ -228,12 +247,15 @@ class GraspAgent:
         if explored:
             rows, cols = np.nonzero(valid)
             pick = int(rng.integers(rows.size))
-            k, i, j = int(rng.integers(self.num_rotations)), int(rows[pick]), int(cols[pick])
+            i, j = int(rows[pick]), int(cols[pick])
+            k = 0 if self.position_action else int(rng.integers(self.num_rotations))
         else:
             masked = np.where(valid[None], q, -np.inf)
             k, i, j = (int(v) for v in np.unravel_index(int(np.argmax(masked)), masked.shape))
+        angle = (perceived_jaw_angle(depth) if self.position_action
+                 else rotation_angle(k, self.num_rotations))
         return GraspAction(
-            rotation=k, row=i, col=j, angle=rotation_angle(k, self.num_rotations),
+            rotation=k, row=i, col=j, angle=angle,
             q_value=math.nan if q is None else float(q[k, i, j]), explored=explored, q_map=q,
         )
 
@@ -260,12 +282,12 @@ class GraspAgent:
         if not (0 <= row < height and 0 <= col < width):
             raise ConfigError("transition.action", f"pixel {(row, col)} outside the map")
         y = self.target_value(transition)
-        opposite = opposite_rotation(k, self.num_rotations)
+        opposite = None if self.position_action else opposite_rotation(k, self.num_rotations)
         rotations = [k] if opposite is None or opposite == k else [k, opposite]
         c, d = self._inputs(transition.color, transition.depth)
         self.eva_net.train()
         with self._autocast():
-            q = self.eva_net(c, d, rotations=rotations)[0]
+            q = self.eva_net(c, d, rotations=rotations, angles=self._turn(transition.depth))[0]
         q = q.float()  # the loss in float32 whatever the forward pass ran in
         loss = td_loss(q, range(len(rotations)), row, col, y)
         q_eva = float(q[0, row, col].detach())
@@ -340,12 +362,14 @@ class GraspAgent:
             raise ConfigError("agent.checkpoint", f"saved with rotate={state['rotate']!r}")
         saved = state.get("network_cfg")
         mine = to_dict(self.network_cfg)
-        if saved is not None and any(saved.get(k) != mine[k]
-                                     for k in ("backbone", "num_rotations")):
+        if saved is not None and (saved.get("action", "rotation") != mine["action"] or any(
+                saved.get(k) != mine[k] for k in ("backbone", "num_rotations"))):
             raise ConfigError(
                 "agent.checkpoint",
-                f"saved for {saved.get('backbone')} with R={saved.get('num_rotations')}, "
-                f"this agent is {mine['backbone']} with R={mine['num_rotations']}",
+                f"saved for {saved.get('backbone')} with the {saved.get('action', 'rotation')} "
+                f"action and R={saved.get('num_rotations')}, this agent is "
+                f"{mine['backbone']} with the {mine['action']} action and "
+                f"R={mine['num_rotations']}",
             )
         try:
             self.eva_net.load_state_dict(state["eva_net"])

@@ -35,14 +35,20 @@ Q[b, k, i, j] predicts the return of closing the gripper at pixel (row i, column
 jaws closing, in the rotated image, along its column (x) axis; in heightmap pixel coordinates
 that is the direction (d_col, d_row) = (cos theta_k, sin theta_k) (:func:`jaw_axis`).
 
-``rotate="features"`` (optional, faster, not in the paper or VPG) runs each trunk once on the
-unrotated padded heightmap and handles the orientation after the trunks. Rotating the feature map
-by theta_k, applying the pointwise (1x1) head and rotating back would be the identity up to
-interpolation, giving R identical maps; instead the head's first convolution also receives the
-angle code e_k = (cos theta_k, sin theta_k, cos 2 theta_k, sin 2 theta_k) as four constant
-channels appended after its first BN-ReLU (its weight is then 64 x (2C + 4)). This trades the
-trunks' rotated views for an R-fold cheaper trunk pass.
-"""
+**Position action** (``network.action = "position"``, the paper's). The network outputs one
+Q map per heightmap, (B, 1, H, W). With ``rotate="input"`` each padded heightmap is turned once,
+by the perceived closing angle theta of its own peg
+(:func:`vgs.grasping.actions.perceived_jaw_angle`, given to :meth:`GraspQNetwork.forward` as
+``angles``), so that the jaws close along the turned image's column axis as in step 2, and the
+Q map is turned back by -theta; with ``rotate="none"`` the trunks see the heightmap as captured.
+
+``rotate="features"`` (rotation action only; optional, faster, not in the paper or VPG) runs each
+trunk once on the unrotated padded heightmap and handles the orientation after the trunks. Rotating
+the feature map by theta_k, applying the pointwise (1x1) head and rotating back would be the
+identity up to interpolation, giving R identical maps; instead the head's first convolution also
+receives the angle code e_k = (cos theta_k, sin theta_k, cos 2 theta_k, sin 2 theta_k) as four
+constant channels appended after its first BN-ReLU (its weight is then 64 x (2C + 4)). This trades
+the trunks' rotated views for an R-fold cheaper trunk pass. """
 
 from __future__ import annotations
 
@@ -61,7 +67,7 @@ from vgs.grasping.densenet import DenseNet121Trunk, load_trunk_weights
 from vgs.grasping.light import LightTrunk
 from vgs.grasping.preprocess import color_fill_value, depth_fill_value
 
-ROTATE_MODES = ("input", "features")
+ROTATE_MODES = ("input", "features", "none")
 PAD_MULTIPLE = 32
 HEAD_WIDTHS = (64, 32)
 ANGLE_CHANNELS = 4
@@ -189,8 +195,9 @@ class GraspQNetwork(nn.Module):
         if rotate not in ROTATE_MODES:
             raise ConfigError("network.rotate", f"must be one of {ROTATE_MODES}, got {rotate!r}")
         self.cfg = cfg
+        self.action = cfg.action
         self.rotate = rotate
-        self.num_rotations = cfg.num_rotations
+        self.num_rotations = cfg.q_maps
         self.color_trunk = build_trunk(cfg.backbone, memory_efficient)
         self.depth_trunk = build_trunk(cfg.backbone, memory_efficient)
         if cfg.weights is not None:
@@ -244,37 +251,56 @@ class GraspQNetwork(nn.Module):
             depth = depth.contiguous(memory_format=torch.channels_last)
         return torch.cat((self.color_trunk(color), self.depth_trunk(depth)), 1)
 
+    def _angles(self, batch: int, rotations: Sequence[int] | None,
+                angles: Sequence[float] | None, device: torch.device) -> tuple[Tensor, int]:
+        """The turn of every trunk input, (B * n,) [rad], and n, the Q maps per heightmap."""
+        if self.action == "position":
+            if rotations is not None and [int(k) for k in rotations] != [0]:
+                raise ConfigError("network.rotation", "the position action has one Q map (0)")
+            turns = [0.0] * batch if angles is None else [float(a) for a in angles]
+            if len(turns) != batch:
+                raise ConfigError("network.angles", f"needs {batch} angles, got {len(turns)}")
+            return torch.tensor(turns, dtype=torch.float64, device=device), 1
+        ks = self._rotation_list(rotations)
+        thetas = [rotation_angle(k, self.num_rotations) for k in ks]
+        return torch.tensor(thetas, dtype=torch.float64, device=device).repeat(batch), len(ks)
+
     def forward(
-        self, color: Tensor, depth: Tensor, rotations: Sequence[int] | None = None
+        self, color: Tensor, depth: Tensor, rotations: Sequence[int] | None = None,
+        angles: Sequence[float] | None = None,
     ) -> Tensor:
         """Q maps of a batch of heightmaps.
 
         Args:
             color: Normalised colour, (B, 3, H, W).
             depth: Normalised depth copied into three channels, (B, 3, H, W).
-            rotations: Rotation indices to evaluate (default: all R, in order).
+            rotations: Rotation action: the rotation indices to evaluate (default: all R, in
+                order). Position action: ``None`` or ``[0]``.
+            angles: Position action: each heightmap's perceived closing angle theta [rad]
+                (default 0), by which ``rotate="input"`` turns it. Ignored otherwise.
 
         Returns:
-            Q values (B, len(rotations), H, W); channel j belongs to rotation ``rotations[j]``.
+            Q values (B, n, H, W): rotation action, channel j belongs to rotation
+            ``rotations[j]``; position action, n = 1.
 
         Raises:
             ConfigError: On mismatched shapes or a rotation index outside [0, R).
         """
         self._check_inputs(color, depth)
-        ks = self._rotation_list(rotations)
         batch, _, height, width = color.shape
+        angles_t, n_rot = self._angles(batch, rotations, angles, color.device)
         size = padded_size(height, width)
-        n_rot = len(ks)
         color_fill = self.color_fill.to(color.dtype)
         depth_fill = self.depth_fill.to(depth.dtype)
         color_p = self._pad(color, color_fill, size)
         depth_p = self._pad(depth, depth_fill, size)
-        angles = torch.tensor([rotation_angle(k, self.num_rotations) for k in ks],
-                              dtype=torch.float64, device=color.device).repeat(batch)
+        angles = angles_t
         if self.rotate == "input":
             color_r = rotate_images(color_p.repeat_interleave(n_rot, 0), angles) + color_fill
             depth_r = rotate_images(depth_p.repeat_interleave(n_rot, 0), angles) + depth_fill
             q = self.head(self._trunks(color_r, depth_r))
+        elif self.rotate == "none":
+            q = self.head(self._trunks(color_p + color_fill, depth_p + depth_fill))
         else:
             features = self._trunks(color_p + color_fill, depth_p + depth_fill)
             code = torch.stack(
@@ -316,12 +342,12 @@ def model_info(cfg: NetworkConfig, rotate: str = "input", size: int = 224) -> di
     """
     if size < 1:
         raise ConfigError("model_info.size", f"must be >= 1, got {size}")
-    net = GraspQNetwork(NetworkConfig(backbone=cfg.backbone, num_rotations=cfg.num_rotations,
-                                      depth_mean=cfg.depth_mean, depth_std=cfg.depth_std),
-                        rotate=rotate)
+    net = GraspQNetwork(NetworkConfig(action=cfg.action, backbone=cfg.backbone,
+                                      num_rotations=cfg.num_rotations, rotate=rotate,
+                                      depth_mean=cfg.depth_mean, depth_std=cfg.depth_std))
     pad = padded_size(size, size)
     feat = pad // net.stride
-    trunk_batch = cfg.num_rotations if rotate == "input" else 1
+    trunk_batch = cfg.q_maps if rotate == "input" else 1
     params = {
         "color_trunk": count_parameters(net.color_trunk),
         "depth_trunk": count_parameters(net.depth_trunk),
@@ -329,9 +355,10 @@ def model_info(cfg: NetworkConfig, rotate: str = "input", size: int = 224) -> di
         "total": count_parameters(net),
     }
     return {
+        "action": cfg.action,
         "backbone": cfg.backbone,
         "rotate": rotate,
-        "num_rotations": cfg.num_rotations,
+        "num_rotations": cfg.q_maps,
         "heightmap": [size, size],
         "padded_size": pad,
         "trunk_stride": net.stride,
@@ -339,7 +366,7 @@ def model_info(cfg: NetworkConfig, rotate: str = "input", size: int = 224) -> di
         "input_shapes": {"color": [1, 3, size, size], "depth": [1, 3, size, size]},
         "trunk_batch": trunk_batch,
         "feature_shape": [trunk_batch, 2 * net.trunk_channels, feat, feat],
-        "output_shape": [1, cfg.num_rotations, size, size],
+        "output_shape": [1, cfg.q_maps, size, size],
         "parameters": params,
     }
 
@@ -350,7 +377,8 @@ def format_model_info(info: dict[str, Any]) -> str:
     shape = "x".join
     rows = [
         ("backbone", f"{info['backbone']} (rotate={info['rotate']})"),
-        ("rotations R", str(info["num_rotations"])),
+        ("action", str(info.get("action", "rotation"))),
+        ("Q maps (rotations R)", str(info["num_rotations"])),
         ("heightmap", shape(str(v) for v in info["heightmap"])),
         ("padded square", f"{info['padded_size']} x {info['padded_size']}"),
         ("trunk stride / channels", f"{info['trunk_stride']} / {info['trunk_channels']}"),
