@@ -92,7 +92,8 @@ class ArmController:
         self.payload_mass = self._tool_mass
         self.payload_com = self._tool_com.copy()
         self._payload_com_t = tuple(self.payload_com.tolist())
-        self._g_tare = (0.0,) * 6
+        self._g_tare = np.zeros(6)
+        self._g_now = np.zeros(6)
         self._compensate = False
 
     def set_payload(self, peg_mass: float) -> None:
@@ -125,7 +126,7 @@ class ArmController:
         contact moment.
         """
         self.ft.tare()
-        self._g_tare = self._gravity_wrench()
+        self._g_tare[:] = self._gravity_wrench()
         self._compensate = True
 
     def set_compliant(self, on: bool) -> None:
@@ -158,8 +159,9 @@ class ArmController:
         operations round)."""
         w = self.ft.sample(self._raw)
         if self._compensate:
-            self.wrench_sensor[:] = [(wi - gi) + ti for wi, gi, ti in zip(
-                w.tolist(), self._gravity_wrench(), self._g_tare, strict=True)]
+            self._g_now[:] = self._gravity_wrench()
+            np.subtract(w, self._g_now, out=self.wrench_sensor)
+            self.wrench_sensor += self._g_tare
         else:
             self.wrench_sensor[:] = w
         R_world_ft = self._ft_xmat
@@ -230,8 +232,10 @@ class ArmController:
             err[:] = e
             np.matmul(JT, err, out=g)
             mujoco.mju_cholSolve(dq, H, g)
-            np.minimum(dq, step_max, out=dq)
-            np.maximum(dq, -step_max, out=dq)
+            steps = dq.tolist()
+            if max(steps) > step_max or min(steps) < -step_max:  # clip only where it acts
+                np.minimum(dq, step_max, out=dq)
+                np.maximum(dq, -step_max, out=dq)
             q += dq
             if max(e) < 1e-7 and min(e) > -1e-7:
                 break

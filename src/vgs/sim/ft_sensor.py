@@ -40,7 +40,7 @@ class FTSensor:
         self._noise = np.zeros(6)  # work arrays, reused every sample
         self._out = np.zeros(6)
         # Standard normal draws in blocks (one generator call per NOISE_BLOCK samples; the
-        # sequence is the same as drawing six values per sample).
+        # sequence is the same as drawing six values per sample), scaled by sigma per block.
         self._block = np.zeros((NOISE_BLOCK, 6))
         self._next = NOISE_BLOCK
 
@@ -49,11 +49,11 @@ class FTSensor:
         in the sensor frame (an array the next call overwrites: copy it to keep it)."""
         if self._next == NOISE_BLOCK:
             self.rng.standard_normal(out=self._block)
+            self._block *= self.sigma
             self._next = 0
         noisy = self._noise
-        np.multiply(self._block[self._next], self.sigma, out=noisy)
+        np.add(self._block[self._next], raw, out=noisy)
         self._next += 1
-        noisy += raw
         if self.filtered is None:
             self.filtered = noisy.copy()
         else:

@@ -190,12 +190,13 @@ class PadStiction:
     def _copy_weld_rows(self, weights: list[float], efc_force: list[float]) -> None:
         """Copy the weld's constraint forces into ``weights`` (no rows unless the pads
         stick)."""
-        ne = self.data.ne  # equality rows come first
+        ne = self.data.ne  # equality rows come first, each constraint's rows together
         if ne:
-            eq = self.eq
-            for i, row_eq in enumerate(self.data.efc_id[:ne].tolist()):
-                if row_eq == eq:
-                    weights[i] = efc_force[i]
+            rows = self.data.efc_id[:ne].tolist()
+            if self.eq in rows:
+                first = rows.index(self.eq)
+                last = first + rows.count(self.eq)
+                weights[first:last] = efc_force[first:last]
 
     def _select_pad_rows(self) -> tuple[float, float]:
         """Set the row weights of the gripper's wrench on the peg (the pad contacts' and the
@@ -243,9 +244,8 @@ class PadStiction:
         t0, t1, t2 = self._p_world_tcp.tolist()
         r0, r1, r2 = p0 - t0, p1 - t1, p2 - t2
         mom = self._mom
-        mom[0] = tau[0] + (r1 * f2 - r2 * f1)
-        mom[1] = tau[1] + (r2 * f0 - r0 * f2)
-        mom[2] = tau[2] + (r0 * f1 - r1 * f0)
+        mom[:] = (tau[0] + (r1 * f2 - r2 * f1), tau[1] + (r2 * f0 - r0 * f2),
+                  tau[2] + (r0 * f1 - r1 * f0))
         R_tcp_world = self._R_tcp_world
         return (np.matmul(R_tcp_world, self._f_peg, out=self._f_tool).tolist(),
                 np.matmul(R_tcp_world, mom, out=self._mom_tool).tolist())
