@@ -154,19 +154,21 @@ class GraspWatch:
             return
         con = d.contact
         peg, is_finger = self._peg, self._is_finger
-        rows = [i for i, (g0, g1) in enumerate(con.geom.tolist())
+        geom = con.geom.tolist()
+        rows = [i for i, (g0, g1) in enumerate(geom)
                 if (g0 == peg or g1 == peg) and (is_finger[g0] or is_finger[g1])]
         if not rows:
             return
-        geom, frames, dims, pos = con.geom, con.frame, con.dim, con.pos
+        frames, dims, pos = con.frame, con.dim.tolist(), con.pos
         tx, ty, tz = self._p_world_tcp.tolist()
         pinch = self._pinch_world
-        f_c, f_world, torque = self._f, self._f_world, self._torque
+        f_c, f_c_linear, f_world, torque = self._f, self._f[:3], self._f_world, self._torque
         moment = 0.0
         for i in rows:
             mujoco.mj_contactForce(m, d, i, f_c)
             frame = frames[i].reshape(3, 3)
-            fx, fy, fz = np.matmul(frame.T, f_c[:3], out=f_world).tolist()  # on geom2, world
+            # The force on geom2, world frame.
+            fx, fy, fz = np.matmul(frame.T, f_c_linear, out=f_world).tolist()
             # Torsional friction: a torque about the contact normal (frame's first row).
             if dims[i] >= 4:
                 t_c = float(f_c[3])
@@ -174,12 +176,11 @@ class GraspWatch:
                 tau = (t_c * nx, t_c * ny, t_c * nz)
             else:
                 tau = (0.0, 0.0, 0.0)
-            sign = -1.0 if geom[i, 0] == peg else 1.0
+            sign = -1.0 if geom[i][0] == peg else 1.0
             px, py, pz = pos[i].tolist()
             rx, ry, rz = px - tx, py - ty, pz - tz
-            torque[0] = (ry * fz - rz * fy) + tau[0]
-            torque[1] = (rz * fx - rx * fz) + tau[1]
-            torque[2] = (rx * fy - ry * fx) + tau[2]
+            torque[:] = ((ry * fz - rz * fy) + tau[0], (rz * fx - rx * fz) + tau[1],
+                         (rx * fy - ry * fx) + tau[2])
             moment += sign * float(np.dot(torque, pinch))
         if self.cell.stiction is not None and self.cell.stiction.stuck:
             # What the pads' stick state carries beyond their contacts' friction.
