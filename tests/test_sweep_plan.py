@@ -37,10 +37,10 @@ def test_default_offsets_span_the_graspable_length() -> None:
 @pytest.mark.parametrize(
     ("spec", "field"),
     [
-        (SweepSpec(offsets=(0.0, 0.045), trials=1), "offsets"),
+        (SweepSpec(offsets=(0.0, 0.051), trials=1), "offsets"),
         (SweepSpec(offsets=(float("nan"),), trials=1), "offsets"),
         (SweepSpec(offsets=(), trials=1), "offsets"),
-        (SweepSpec(offsets=(0.035,), trials=1, length_range=0.15), "offsets"),
+        (SweepSpec(offsets=(0.043,), trials=1, length_range=0.15), "offsets"),
         (SweepSpec(offsets=(0.0,), trials=0), "trials"),
         (SweepSpec(offsets=(0.0,), trials=1, mass_range=1.0), "mass_range"),
         (SweepSpec(offsets=(0.0,), trials=1, length_range=0.6), "length_range"),

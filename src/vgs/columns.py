@@ -126,7 +126,11 @@ _RATE = "fraction of the episodes"
 _GAINS = (("gain", "efficiency gain over the baseline, (T_base - T) / T_base on the mean times "
                    "of the successes"),
           ("total_gain", "gain in total time over the baseline, (S_base - S) / S_base on the "
-                         "summed times of all attempts (the paper's measure)"))
+                         "summed times of all attempts (the paper's measure)"),
+          ("success_total_gain", "gain in total time over the baseline with the failed "
+                                 "attempts left out: the summed times of the successes"),
+          ("align_gain", "gain on the mean alignment time of the successes (the phase the "
+                         "paper studies)"))
 SUMMARY_COLUMNS: dict[str, Column] = {
     "condition": COLUMNS["condition"],
     "policy": COLUMNS["policy"],
@@ -151,6 +155,10 @@ SUMMARY_COLUMNS: dict[str, Column] = {
                                                   f"{prefix}_pct")),
         (f"{prefix}_ci_high", Column("%", "float", f"upper end of the 95 % interval of "
                                                    f"{prefix}_pct")),
+        (f"{prefix}_t_low", Column("%", "float", f"lower end of Student's t 95 % interval of "
+                                                 f"the mean {prefix}_pct over training runs")),
+        (f"{prefix}_t_high", Column("%", "float", f"upper end of Student's t 95 % interval of "
+                                                  f"the mean {prefix}_pct over training runs")),
         (f"{prefix}_sd_between_seeds", Column("%", "float", f"standard deviation of {prefix}_pct "
                                                             "between training runs")),
         (f"seeds_with_positive_{prefix}", Column("", "int", f"training runs whose {prefix}_pct "
@@ -163,6 +171,8 @@ SUMMARY_COLUMNS: dict[str, Column] = {
            ("grasp_success", Column("", "float", f"{_RATE} with a held grasp")),
            ("offset_mm", Column("mm", "float", "mean |grasp offset| from the centre of mass")),
            ("time_mean_s", Column("s", "float", "mean assembly time of the successes")),
+           ("time_std_s", Column("s", "float", "standard deviation of the successes' assembly "
+                                               "times")),
            ("time_all_h", Column("h", "float", "total assembly time of all attempts, failed "
                                                "ones until given up")),
            ("time_per_assembled_s", Column("s", "float", "assembly time per assembled peg, "

@@ -49,16 +49,21 @@ from vgs.experiments.evaluate import summarize  # noqa: E402
 from vgs.experiments.report import PAPER, load_results  # noqa: E402
 from vgs.experiments.reportfigures import CONDITION_TITLES, LEARNED  # noqa: E402
 from vgs.experiments.stats import (  # noqa: E402
+    ALIGN_GAIN,
     BOOTSTRAP_RESAMPLES,
+    GAINS,
     MEAN_GAIN,
+    SUCCESS_TOTAL_GAIN,
     TOTAL_GAIN,
     Measure,
     efficiency_gain,
     sample_std,
+    t_interval,
     time_arrays,
 )
 
-GAINS = (MEAN_GAIN, TOTAL_GAIN)  # each gives the columns <name>_pct, <name>_ci_low, ...
+# Each gain of stats.GAINS gives the columns <name>_pct, <name>_ci_low, <name>_ci_high, and on
+# the mean row <name>_sd_between_seeds, <name>_t_low, <name>_t_high, seeds_with_positive_<name>.
 
 
 def load_seeds(folders: list[Path]) -> pd.DataFrame:
@@ -134,7 +139,10 @@ def mean_gain(pairs: list[tuple[pd.DataFrame, pd.DataFrame]],
     if len(indices) > 1:
         raise ConfigError("seeds", "the training runs' tables do not hold the same test "
                                    "episodes; the crossed bootstrap needs shared scenes")
-    arrays = [(*time_arrays(b), *time_arrays(v)) for b, v in pairs]
+    if any(measure.column not in t.columns for pair in pairs for t in pair):
+        return math.nan, math.nan, math.nan  # tables written without that column
+    arrays = [(*time_arrays(b, measure.column), *time_arrays(v, measure.column))
+              for b, v in pairs]
     gains = [measure(*a) for a in arrays]
     value = float(np.mean(gains)) if gains else math.nan
     if (not math.isfinite(value)
@@ -180,6 +188,7 @@ def seeds_table(df: pd.DataFrame) -> pd.DataFrame:
                 "offset_mm_baseline": sb["abs_grasp_offset_mean_mm"],
                 "offset_mm_vgs": sv["abs_grasp_offset_mean_mm"],
                 "time_mean_s_baseline": sb["time_mean_s"], "time_mean_s_vgs": sv["time_mean_s"],
+                "time_std_s_baseline": sb["time_std_s"], "time_std_s_vgs": sv["time_std_s"],
                 "time_all_h_baseline": sb["time_all_h"], "time_all_h_vgs": sv["time_all_h"],
                 "time_per_assembled_s_baseline": sb["time_per_assembled_s"],
                 "time_per_assembled_s_vgs": sv["time_per_assembled_s"],
@@ -202,8 +211,10 @@ def seeds_table(df: pd.DataFrame) -> pd.DataFrame:
         for m in GAINS:
             value, low, high = mean_gain(pairs, measure=m)
             gains = np.array([r[f"{m.name}_pct"] for r in mine_rows], float)
+            t_low, t_high = t_interval(gains)
             mean_row.update({f"{m.name}_pct": value, f"{m.name}_ci_low": low,
                              f"{m.name}_ci_high": high,
+                             f"{m.name}_t_low": t_low, f"{m.name}_t_high": t_high,
                              f"{m.name}_sd_between_seeds": sample_std(gains),
                              f"seeds_with_positive_{m.name}": int(np.sum(gains > 0))})
         mean_row["seeds"] = len(mine_rows)
@@ -266,9 +277,12 @@ def _gain_text(row: pd.Series, key: str = MEAN_GAIN.name) -> str:
     value, low, high = row[f"{key}_pct"], row[f"{key}_ci_low"], row[f"{key}_ci_high"]
     if not math.isfinite(value):
         return "n/a"
-    if not math.isfinite(low):
-        return f"{value:+.1f} %"
-    return f"{value:+.1f} % [{low:+.1f}, {high:+.1f}]"
+    text = f"{value:+.1f} %" if not math.isfinite(low) else (
+        f"{value:+.1f} % [{low:+.1f}, {high:+.1f}]")
+    t_low, t_high = row.get(f"{key}_t_low", math.nan), row.get(f"{key}_t_high", math.nan)
+    if isinstance(t_low, float) and math.isfinite(t_low):
+        text += f", t [{t_low:+.1f}, {t_high:+.1f}]"
+    return text
 
 
 def _interval_verdict(low: float, high: float) -> str:
@@ -290,18 +304,26 @@ def seeds_markdown(table: pd.DataFrame, folders: list[Path], dest: Path, figure:
              "T_baseline on the mean time of successful assemblies, 95 % interval from the "
              "paired bootstrap over test episodes; the mean row averages the runs' gains, its "
              "interval from the crossed bootstrap (training runs and one shared draw of the "
-             "test scenes per replicate: every run met the same scenes). Gain in total time: "
-             "the same on the summed assembly times of all tests, failed attempts included "
-             "(the paper's own measure; its tests all assembled).", ""]
+             "test scenes per replicate: every run met the same scenes), and beside it Student's "
+             "t interval over the runs' gains (mean +- t s / sqrt(n); it sees only the spread "
+             "between runs, and with few runs it is wide: t = 2.78 for five). The bootstrap "
+             "over n runs can only redraw those n values, so for few runs it understates the "
+             "spread between runs; the t interval assumes the gains are normal. Gain in total "
+             "time: the same on the summed assembly times of all tests, failed attempts included "
+             "until given up (the paper's own measure; its tests all assembled); without "
+             "failed attempts: the summed times of the successes alone; alignment: the gain on "
+             "the mean alignment time of the successes, the phase the paper studies.", ""]
     for condition in dict.fromkeys(table["condition"]):
         part = table[table["condition"] == condition]
         paper = PAPER.get(condition, {}).get("gain")
         lines += [f"## {CONDITION_TITLES.get(condition, condition)}", ""]
         lines += ["| training run | assembled, baseline / VGS | grasp success | "
                   "mean grasp offset [mm] | mean time of successes [s] | "
-                  "total time of all tests [h] | time per assembled peg [s] | gain | "
-                  "gain in total time |",
-                  "|---|---|---|---|---|---|---|---|---|"]
+                  "standard deviation [s] | total time of all tests [h] | "
+                  "time per assembled peg [s] | gain in total time | "
+                  "same, without failed attempts | gain on mean times | "
+                  "gain in alignment |",
+                  "|---|---|---|---|---|---|---|---|---|---|---|---|"]
         for _, r in part.iterrows():
             run = "**mean**" if r["train_run"] == "mean" else str(r["train_run"])
             lines.append(
@@ -309,10 +331,12 @@ def seeds_markdown(table: pd.DataFrame, folders: list[Path], dest: Path, figure:
                 f"{r['episodes']} | {_fmt(r['grasp_success_baseline'], 2)} / "
                 f"{_fmt(r['grasp_success_vgs'], 2)} | {_fmt(r['offset_mm_baseline'])} / "
                 f"{_fmt(r['offset_mm_vgs'])} | {_fmt(r['time_mean_s_baseline'])} / "
-                f"{_fmt(r['time_mean_s_vgs'])} | {_fmt(r['time_all_h_baseline'], 2)} / "
+                f"{_fmt(r['time_mean_s_vgs'])} | {_fmt(r['time_std_s_baseline'], 2)} / "
+                f"{_fmt(r['time_std_s_vgs'], 2)} | {_fmt(r['time_all_h_baseline'], 2)} / "
                 f"{_fmt(r['time_all_h_vgs'], 2)} | {_fmt(r['time_per_assembled_s_baseline'])} / "
-                f"{_fmt(r['time_per_assembled_s_vgs'])} | {_gain_text(r)} | "
-                f"{_gain_text(r, TOTAL_GAIN.name)} |")
+                f"{_fmt(r['time_per_assembled_s_vgs'])} | {_gain_text(r, TOTAL_GAIN.name)} | "
+                f"{_gain_text(r, SUCCESS_TOTAL_GAIN.name)} | {_gain_text(r)} | "
+                f"{_gain_text(r, ALIGN_GAIN.name)} |")
         mean = part[part["train_run"] == "mean"].iloc[0]
         seeds = int(mean["seeds"])
         verdict = (f"{int(mean['seeds_with_positive_gain'])} of {seeds} training runs give VGS "
@@ -329,11 +353,18 @@ def seeds_markdown(table: pd.DataFrame, folders: list[Path], dest: Path, figure:
         elif seeds == 3:
             verdict += ("three training runs only: the crossed bootstrap draws its runs from "
                         "ten distinct sets, so its interval is coarse; ")
+        elif 3 < seeds < 10:
+            verdict += (f"{seeds} training runs: the crossed bootstrap redraws these {seeds} "
+                        "values only and can understate the spread between runs, so read the "
+                        "t interval beside it; ")
         verdict += "the mean gain: " + _interval_verdict(mean["gain_ci_low"],
                                                           mean["gain_ci_high"])
         verdict += (f" In total time, {int(mean['seeds_with_positive_total_gain'])} of {seeds} "
                     "training runs give VGS the shorter total; the mean gain in total time: "
                     + _interval_verdict(mean["total_gain_ci_low"], mean["total_gain_ci_high"]))
+        verdict += (f" In the alignment phase, {int(mean['seeds_with_positive_align_gain'])} of "
+                    f"{seeds} training runs give VGS the shorter mean; the mean gain: "
+                    + _interval_verdict(mean["align_gain_ci_low"], mean["align_gain_ci_high"]))
         if paper is not None:
             verdict += f" The paper reports {paper:+.2f} %."
         totals = PAPER.get(condition, {}).get("time_total_h")

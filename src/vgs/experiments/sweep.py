@@ -37,7 +37,6 @@ from vgs.errors import ConfigError, VGSError
 from vgs.experiments.sweepstats import paired_analysis, summarize
 from vgs.jsonsafe import dumps
 from vgs.runfolder import host, hosts_of
-from vgs.sim.rg2 import PAD_HALF
 
 # The sweep keeps the pad's near edge this far inside the peg's end (pads are 22 mm long).
 END_MARGIN = 0.015
@@ -107,8 +106,11 @@ def default_offsets(nominal: PegConfig, count: int, length_range: float = 0.0) -
 def check_spec(spec: SweepSpec, cell: CellConfig) -> None:
     """Validate a sweep against the cell's peg.
 
-    Every offset must keep both pads (22 mm long) on the shortest peg the length range draws,
-    and the extreme pegs must form valid cells.
+    Every offset must keep the pads' centre on the shortest peg the length range draws (a
+    learned or random policy grasps anywhere on the peg's visible pixels, so the sweep measures
+    the whole graspable length; beyond ``L/2 - 11 mm`` the 22 mm pads (``vgs.sim.rg2.PAD_HALF``) overhang the peg's end,
+    and whether they still hold is what the sweep finds), and the extreme pegs must form valid
+    cells.
 
     Raises:
         ConfigError: Naming ``offsets``, ``trials``, ``mass_range`` or ``length_range``.
@@ -127,13 +129,13 @@ def check_spec(spec: SweepSpec, cell: CellConfig) -> None:
             replace(cell, peg=replace(peg, length=peg.length * factor))
         except ConfigError as exc:
             raise ConfigError("length_range", f"gives an invalid peg ({exc})") from exc
-    limit = 0.5 * shortest_length(peg, spec.length_range) - PAD_HALF[0]
+    limit = 0.5 * shortest_length(peg, spec.length_range)
     for offset in spec.offsets:
         if not (math.isfinite(offset) and abs(offset) <= limit + 1e-12):
             raise ConfigError(
                 "offsets",
-                f"{offset * 1000:g} mm is off the peg: the pads stay on it for |offset| <= "
-                f"{limit * 1000:.1f} mm",
+                f"{offset * 1000:g} mm is off the peg: the pads' centre stays on it for "
+                f"|offset| <= {limit * 1000:.1f} mm",
             )
 
 
