@@ -108,9 +108,9 @@ def check_spec(spec: SweepSpec, cell: CellConfig) -> None:
 
     Every offset must keep the pads' centre on the shortest peg the length range draws (a
     learned or random policy grasps anywhere on the peg's visible pixels, so the sweep measures
-    the whole graspable length; beyond ``L/2 - 11 mm`` the 22 mm pads (``vgs.sim.rg2.PAD_HALF``) overhang the peg's end,
-    and whether they still hold is what the sweep finds), and the extreme pegs must form valid
-    cells.
+    the whole graspable length; beyond ``L/2 - 11 mm`` the 22 mm pads
+    (``vgs.sim.rg2.PAD_HALF``) overhang the peg's end, and whether they still hold is what the
+    sweep finds), and the extreme pegs must form valid cells.
 
     Raises:
         ConfigError: Naming ``offsets``, ``trials``, ``mass_range`` or ``length_range``.
