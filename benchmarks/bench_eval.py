@@ -24,7 +24,8 @@ Prints
 * an estimate of the ``paper`` profile's wall time on this machine, from measured parts: the
   mean wall time of a training episode's simulation (from the quick run's ``episodes.csv``,
   network time removed), one training step and one greedy decision of each backbone at the
-  paper's settings (R = 16, 224 x 224), and the measured evaluation throughput
+  paper's settings (the rotation action, R = 16, 224 x 224), and the measured evaluation
+  throughput
   (targets: 8 h with DenseNet-121, 3 h with the light backbone; the features rotation mode of
   DenseNet-121 and ``network.precision = bfloat16`` are listed too).
 
@@ -49,7 +50,7 @@ import numpy as np
 import pandas as pd
 
 from vgs.assembly.episode import EpisodeRunner, center_policy, offset_policy
-from vgs.config import profile
+from vgs.config import NetworkConfig, profile
 from vgs.experiments.evaluate import EvalSpec, evaluate_many
 from vgs.grasping.replay import cache_size_for
 
@@ -104,27 +105,26 @@ def ray_startup() -> float:
     return time.perf_counter() - t0
 
 
-def network_step_seconds(backbone: str, threads: int, rotate: str = "input",
-                         precision: str = "float32") -> tuple[float, float]:
-    """(one training update incl. one replay, one greedy decision) at R = 16, 224 px [s].
+def network_step_seconds(network: NetworkConfig, threads: int) -> tuple[float, float]:
+    """(one training update incl. one replay, one greedy decision) of ``network`` on a 224 px
+    heightmap [s].
 
     Each is timed after one untimed call of its own (oneDNN builds its kernels on the first
     call, which in bfloat16 took longer than the call itself); the decision is the median of
     three."""
     import torch
 
-    from vgs.config import AgentConfig, NetworkConfig
+    from vgs.config import AgentConfig
     from vgs.grasping.agent import GraspAgent
     from vgs.grasping.replay import ReplayBuffer, Transition
 
     torch.set_num_threads(threads)
-    agent = GraspAgent(NetworkConfig(backbone=backbone, num_rotations=16, rotate=rotate,
-                                     precision=precision), AgentConfig())
+    agent = GraspAgent(network, AgentConfig())
     rng = np.random.default_rng(0)
     color = rng.integers(0, 255, (224, 224, 3), dtype=np.uint8)
     depth = np.zeros((224, 224), np.float32)
     depth[100:115, 80:130] = 0.03
-    tr = Transition(color, depth, (3, 107, 100), 0.3, done=True)
+    tr = Transition(color, depth, (min(3, network.q_maps - 1), 107, 100), 0.3, done=True)
     replay = ReplayBuffer(10)
     agent.update(tr)  # warm-up
     t0 = time.perf_counter()
@@ -164,8 +164,7 @@ def light_parts(episodes: int) -> dict[str, float]:
     cut = [cpu(runner.run, seed, policy, time_limit=limit)[0] for seed, policy in grasps]
     grasp = [cpu(runner.run, seed, policy, assemble=False)[0] for seed, policy in grasps]
     render = [cpu(runner.observe, seed)[0] for seed, _ in grasps]
-    update, decide = network_step_seconds(cfg.network.backbone, 1, cfg.network.rotate,
-                                          cfg.network.precision)
+    update, decide = network_step_seconds(cfg.network, 1)
     return {"whole": float(np.mean(whole)), "cut": float(np.mean(cut)), "limit_s": limit,
             "grasp": float(np.mean(grasp)), "render": float(np.mean(render)),
             "update": update, "decide": decide,
@@ -281,7 +280,7 @@ def main() -> None:
     paper = profile("paper")
     runs = [pd.read_csv(p) for p in sorted((qdir / "train").glob("*/episodes.csv"))]
     quick = profile("quick")
-    q_update, q_decide = network_step_seconds(quick.network.backbone, max(1, cores // 2))
+    q_update, q_decide = network_step_seconds(quick.network, max(1, cores // 2))
     train = pd.concat(runs)
     sim_train = float(train["wall_s"].mean()) - q_update - q_decide * float(
         (train["explored"] == 0).mean())
@@ -301,7 +300,9 @@ def main() -> None:
                                         ("densenet121", "features", "bfloat16"),
                                         ("light", "input", "float32"),
                                         ("light", "input", "bfloat16")):
-        update, decide = network_step_seconds(backbone, max(1, cores // 2), rotate, precision)
+        update, decide = network_step_seconds(
+            NetworkConfig(backbone=backbone, action="rotation", num_rotations=16, rotate=rotate,
+                          precision=precision), max(1, cores // 2))
         per_train = sim_train + update + greedy_share * decide
         parallel = min(cores, 2 * len(paper.reproduce.train_seeds))
         train_h = 2 * len(paper.reproduce.train_seeds) * paper.train.episodes * per_train \

@@ -22,10 +22,10 @@ class Gripper:
         self.cfg = cfg
         self.target = cfg.stroke / 2  # per-finger opening target [m]
         self._acts = [int(a) for a in cell.ids.finger_act]
-        joints = [int(q) for q in cell.ids.finger_qpos]
-        if joints != list(range(joints[0], joints[0] + len(joints))):
-            raise ValueError("the finger joints must be numbered contiguously")
-        self._finger_qpos = cell.data.qpos[joints[0]:joints[0] + len(joints)]  # a view
+        left, right = (int(q) for q in cell.ids.finger_qpos)
+        if right != left + 1:
+            raise ValueError("the two finger joints must be numbered contiguously")
+        self._finger_qpos = cell.data.qpos[left:right + 1]  # a view
 
     def command(self, width: float) -> None:
         """Set the target opening between the pads [m] (0 = closed, stroke = open)."""
@@ -42,6 +42,7 @@ class Gripper:
                 ctrl[a] = c + min(max(target - c, -step), step)
 
     def width(self) -> float:
-        """Finger width reading [m]: the fingers' joint openings summed (as
+        """Finger width reading [m]: the two fingers' joint openings summed (as
         :meth:`vgs.sim.cell.Cell.finger_opening`, without its per-call indexing)."""
-        return sum(self._finger_qpos.tolist())
+        left, right = self._finger_qpos.tolist()
+        return left + right

@@ -19,20 +19,22 @@ def exp_so3(w: np.ndarray) -> np.ndarray:
     """Rodrigues: ``exp([w]_x) = I + sin(t) K + (1 - cos t) K^2``, ``t = |w|``, ``K = [w/t]_x``.
 
     Written out on Python floats (with ``K^2 = u u^T - I``, ``u = w / t``): numpy's per-call
-    overhead dominates on 3-vectors, and this runs several times per control tick.
+    overhead dominates on 3-vectors, and this runs several times per control tick. The matrix
+    is built from its nine entries in row order (a flat tuple converts in half the time of
+    nested lists).
     """
     w0, w1, w2 = w.tolist() if isinstance(w, np.ndarray) else map(float, w)
     theta = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
     if theta < 1e-12:
-        return np.array([[1.0, -w2, w1], [w2, 1.0, -w0], [-w1, w0, 1.0]])
+        return np.array((1.0, -w2, w1, w2, 1.0, -w0, -w1, w0, 1.0)).reshape(3, 3)
     x, y, z = w0 / theta, w1 / theta, w2 / theta
     s, c = math.sin(theta), 1.0 - math.cos(theta)
     xy, xz, yz = c * x * y, c * x * z, c * y * z
-    return np.array([
-        [1.0 - c * (y * y + z * z), xy - s * z, xz + s * y],
-        [xy + s * z, 1.0 - c * (x * x + z * z), yz - s * x],
-        [xz - s * y, yz + s * x, 1.0 - c * (x * x + y * y)],
-    ])
+    return np.array((
+        1.0 - c * (y * y + z * z), xy - s * z, xz + s * y,
+        xy + s * z, 1.0 - c * (x * x + z * z), yz - s * x,
+        xz - s * y, yz + s * x, 1.0 - c * (x * x + y * y),
+    )).reshape(3, 3)
 
 
 def log_so3(R: np.ndarray) -> np.ndarray:
