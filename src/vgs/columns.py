@@ -279,16 +279,19 @@ def field_metadata(name: str) -> dict[str, str]:
     return {"unit": col.unit, "description": col.description}
 
 
-def write_parquet(df: Any, path: Path) -> None:
+def write_parquet(df: Any, path: Path, metadata: dict[str, str] | None = None) -> None:
     """Write a table (pandas DataFrame, no index) to ``path`` as parquet, each field's metadata
-    holding its ``unit`` and ``description``."""
+    holding its ``unit`` and ``description``; ``metadata`` (e.g.
+    :func:`vgs.runfolder.provenance`) goes into the schema's metadata, read back with
+    ``pyarrow.parquet.read_schema(path).metadata``."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
     table = pa.Table.from_pandas(df, preserve_index=False)
     fields = [f.with_metadata(field_metadata(f.name)) if field_metadata(f.name) else f
               for f in table.schema]
-    schema = pa.schema(fields, metadata=table.schema.metadata)
+    extra = {str(k).encode(): str(v).encode() for k, v in (metadata or {}).items()}
+    schema = pa.schema(fields, metadata={**(table.schema.metadata or {}), **extra})
     pq.write_table(pa.Table.from_arrays(table.columns, schema=schema), path)
 
 

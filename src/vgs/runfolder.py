@@ -219,3 +219,53 @@ def read_table(path: Path) -> Any:
         first = " ".join(str(exc).split())[:160]
         raise CorruptFileError(path, f"is not a readable table ({type(exc).__name__}: "
                                      f"{first})") from None
+
+
+@functools.cache
+def provenance() -> dict[str, str]:
+    """Where a result came from, recorded (never compared) in ``run.json``, an evaluation's
+    ``meta.json``, ``reproduce.json``, the parquet tables' schema metadata and the report:
+    ``vgs_version``, ``source_revision`` (the git commit of the source tree vgs runs from, or
+    ``"installed package"`` when vgs runs from an installed copy, not from a checkout),
+    ``mujoco_version`` and ``torch_version`` (read from the installed distributions: torch is
+    not imported).
+    """
+    from importlib import metadata
+
+    def version(name: str) -> str:
+        try:
+            return metadata.version(name)
+        except metadata.PackageNotFoundError:
+            return "unknown"
+
+    return {"vgs_version": version("vgs"), "source_revision": source_revision(),
+            "mujoco_version": version("mujoco"), "torch_version": version("torch")}
+
+
+@functools.cache
+def source_revision() -> str:
+    """The git commit (``git rev-parse HEAD``) of the checkout vgs is imported from (an
+    editable install or ``PYTHONPATH=src``), with ``+modified`` when files under ``src/`` differ
+    from it; ``"installed package"`` when vgs runs from a copy outside a checkout (a wheel in
+    site-packages, even one inside another repository); ``"unknown"`` without git."""
+    import subprocess
+
+    src = Path(__file__).resolve().parent.parent  # .../src when run from a checkout
+    root = src.parent
+    if src.name != "src" or not (root / "pyproject.toml").is_file():
+        return "installed package"
+    try:
+        def git(*args: str) -> subprocess.CompletedProcess[str]:
+            return subprocess.run(["git", *args], capture_output=True, text=True, cwd=root,
+                                  timeout=10)
+
+        top = git("rev-parse", "--show-toplevel").stdout.strip()
+        if not top or Path(top).resolve() != root:
+            return "installed package"
+        rev = git("rev-parse", "HEAD").stdout.strip()
+        if not rev:
+            return "unknown"
+        dirty = git("diff", "--quiet", "HEAD", "--", "src").returncode == 1
+        return rev + ("+modified" if dirty else "")
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"

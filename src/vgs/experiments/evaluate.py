@@ -61,7 +61,7 @@ from vgs.experiments.episodepool import BACKENDS, EpisodeTask, run_local, run_ra
 from vgs.experiments.journal import encode_row, read_journal
 from vgs.experiments.policies import EvalPolicy, load_policy, policy_label
 from vgs.experiments.stats import sample_std
-from vgs.runfolder import check_request, locked, read_json, write_json
+from vgs.runfolder import check_request, locked, provenance, read_json, write_json
 from vgs.validate import check_config, check_seed
 
 EVAL_STREAM = 0xE7A1  # tags the seed sequences of test episodes
@@ -173,7 +173,7 @@ def _prepare(cfg: ExperimentConfig, spec: EvalSpec, out: Path,
     meta = {"policy": policy_label(spec.policy), "policy_source": spec.policy,
             "policy_trained_episodes": getattr(policy, "trained_episodes", None),
             "condition": spec.condition, "episodes": spec.episodes, "seed": spec.seed,
-            "config": to_dict(cfg)}
+            "config": to_dict(cfg), "provenance": provenance()}
     meta_path = out / "meta.json"
     if meta_path.exists():
         old = read_json(meta_path)
@@ -218,7 +218,7 @@ def table_order(columns: list[str]) -> list[str]:
 def write_tables(df: pd.DataFrame, out: Path) -> None:
     """``out/episodes.parquet`` (units and descriptions in the fields' metadata) and
     ``out/episodes.csv``, each written whole and renamed into place."""
-    for name, write in (("episodes.parquet", lambda p: write_parquet(df, p)),
+    for name, write in (("episodes.parquet", lambda p: write_parquet(df, p, provenance())),
                         ("episodes.csv", lambda p: df.to_csv(p, index=False))):
         tmp = out / f".{name}.tmp"
         write(tmp)

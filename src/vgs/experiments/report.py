@@ -247,6 +247,11 @@ def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
         doc.p(f"Profile `{meta.get('profile')}`, command `{meta.get('command')}`, on "
               f"{meta.get('machine', '?')}; git {str(meta.get('git_revision', '?'))[:10]}; "
               f"finished {meta.get('finished', '?')}.")
+        made = meta.get("provenance")
+        if isinstance(made, dict):
+            doc.p(f"Made with vgs {made.get('vgs_version', '?')} (source "
+                  f"{str(made.get('source_revision', '?'))[:18]}), MuJoCo "
+                  f"{made.get('mujoco_version', '?')}, torch {made.get('torch_version', '?')}.")
         stages = meta.get("stage_wall_s", {})
         if stages:
             doc.p("Wall time per stage: " + ", ".join(

@@ -45,7 +45,7 @@ from vgs.experiments.layout import eval_jobs, train_runs
 from vgs.experiments.report import build_report
 from vgs.experiments.train import train
 from vgs.experiments.trainfolder import git_revision
-from vgs.runfolder import check_request, locked, read_json, read_table, write_json
+from vgs.runfolder import check_request, locked, provenance, read_json, read_table, write_json
 from vgs.validate import check_config
 
 
@@ -113,6 +113,7 @@ class Reproduction:
                               extendable=("eval.episodes",))
             self.meta.update({"profile": cfg.name, "config": to_dict(cfg),
                               "machine": machine(), "git_revision": git_revision(),
+                              "provenance": provenance(),
                               "command": "vgs " + shlex.join(sys.argv[1:])
                               if sys.argv and sys.argv[0].endswith("vgs") else None})
             self.meta.setdefault("stage_wall_s", {})

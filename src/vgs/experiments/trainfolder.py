@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import csv
 import os
-import subprocess
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -22,7 +21,7 @@ from vgs.config import ExperimentConfig, to_dict
 from vgs.errors import CheckpointError, ConfigError, CorruptFileError, RunMismatchError
 from vgs.grasping.agent import DeltaQMonitor, GraspAgent
 from vgs.grasping.replay import ReplayBuffer, maps_digest
-from vgs.runfolder import check_request, host, read_json
+from vgs.runfolder import check_request, host, provenance, read_json, source_revision
 
 # Column vocabulary of vgs.columns; booleans are written True/False (0/1 before 2026-12).
 CSV_COLUMNS = (
@@ -235,12 +234,9 @@ def load_checkpoint(path: Path, agent: GraspAgent, replay: ReplayBuffer | None =
 
 
 def git_revision() -> str:
-    try:
-        out = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True,
-                             cwd=Path(__file__).resolve().parent, timeout=5)
-        return out.stdout.strip() or "unknown"
-    except (OSError, subprocess.SubprocessError):
-        return "unknown"
+    """The source revision (:func:`vgs.runfolder.source_revision`): a commit, or
+    ``"installed package"`` outside a checkout."""
+    return source_revision()
 
 
 def check_start(cfg: ExperimentConfig, mode: str, out: Path, threads: int | None = None
@@ -272,10 +268,18 @@ def check_start(cfg: ExperimentConfig, mode: str, out: Path, threads: int | None
         hosts = meta.get("hosts") if isinstance(meta.get("hosts"), list) else []
         kept = meta.get("torch_threads")
         run_threads = kept if isinstance(kept, int) and kept >= 1 else asked
-        if not grown and here in hosts and kept == run_threads:
+        # Provenance is recorded, never compared: a run resumed by another vgs (or MuJoCo,
+        # torch) is kept, and the versions that resumed it are listed.
+        made = meta.get("provenance") if isinstance(meta.get("provenance"), dict) else None
+        resumed = meta.get("resumed_with") if isinstance(meta.get("resumed_with"), list) else []
+        now = provenance()
+        new_versions = now != made and now not in resumed
+        if not grown and here in hosts and kept == run_threads and not new_versions:
             return schedule, run_threads, None
         meta.update(config=to_dict(cfg), schedule_episodes=schedule, torch_threads=run_threads,
                     hosts=hosts + ([here] if here not in hosts else []))
+        if new_versions:
+            meta["resumed_with"] = [*resumed, now]
         return schedule, run_threads, meta
     leftovers = [n for n in ("checkpoint.pt", "episodes.csv") if (out / n).exists()]
     if leftovers:
@@ -284,4 +288,5 @@ def check_start(cfg: ExperimentConfig, mode: str, out: Path, threads: int | None
     return cfg.train.episodes, asked, {
         "mode": mode, "config": to_dict(cfg), "schedule_episodes": cfg.train.episodes,
         "torch_threads": asked, "git_revision": git_revision(),
-        "python": sys.version.split()[0], "torch": torch.__version__, "hosts": [here]}
+        "python": sys.version.split()[0], "torch": torch.__version__, "hosts": [here],
+        "provenance": provenance()}

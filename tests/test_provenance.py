@@ -1,0 +1,64 @@
+"""Every result says where it came from (issue 42, item 3): a training run and an evaluation
+made by vgs running from an installed copy (not a checkout) record vgs's version, "installed
+package" as the source, MuJoCo's and torch's versions, in run.json, meta.json and the parquet
+schema; a resume with other recorded versions is not refused."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from importlib import metadata
+from pathlib import Path
+
+import pytest
+
+import vgs
+from vgs.runfolder import provenance, read_json
+
+SMALL = ["--profile", "smoke", "--set", "cell.camera.size=64", "--set",
+         "cell.camera.pixel_size=0.007", "--no-progress"]
+
+
+def test_provenance_fields() -> None:
+    p = provenance()
+    assert p["vgs_version"] == metadata.version("vgs") == vgs.__version__
+    assert p["mujoco_version"] == metadata.version("mujoco")
+    assert p["torch_version"] == metadata.version("torch")
+    assert p["source_revision"]
+
+
+@pytest.mark.slow
+def test_installed_copy_records_its_versions(tmp_path: Path) -> None:
+    site = tmp_path / "site"
+    shutil.copytree(Path(vgs.__file__).parent, site / "vgs",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    env = {**os.environ, "PYTHONPATH": str(site)}
+
+    def run(*args: str) -> None:
+        proc = subprocess.run([sys.executable, "-m", "vgs.cli", *args], capture_output=True,
+                              text=True, timeout=600, cwd=tmp_path, env=env)
+        assert proc.returncode == 0, proc.stderr
+
+    run("train", "--mode", "baseline", "--episodes", "1", "--out", "run", *SMALL)
+    made = read_json(tmp_path / "run" / "run.json")["provenance"]
+    assert made == {**provenance(), "source_revision": "installed package"}
+    assert made["vgs_version"] == vgs.__version__
+    # A resume by another vgs is recorded, not refused.
+    meta = read_json(tmp_path / "run" / "run.json")
+    meta["provenance"] = {**made, "vgs_version": "0.0.1"}
+    (tmp_path / "run" / "run.json").write_text(json.dumps(meta))
+    run("train", "--mode", "baseline", "--episodes", "2", "--out", "run", *SMALL)
+    meta = read_json(tmp_path / "run" / "run.json")
+    assert meta["provenance"]["vgs_version"] == "0.0.1" and meta["resumed_with"] == [made]
+
+    run("evaluate", "--policy", "random", "--episodes", "1", "--workers", "1", "--out", "ev",
+        *SMALL)
+    assert read_json(tmp_path / "ev" / "meta.json")["provenance"] == made
+    import pyarrow.parquet as pq
+
+    schema = pq.read_schema(tmp_path / "ev" / "episodes.parquet").metadata
+    assert {k.decode(): v.decode() for k, v in schema.items() if not k.startswith(b"pandas")} \
+        == made
