@@ -7,12 +7,15 @@ Rendering never runs inside the simulation's control loop: an episode records it
 
 MuJoCo picks its OpenGL back end from the environment variable ``MUJOCO_GL`` when it is first
 imported: ``egl`` (headless, a GPU or Mesa's EGL), ``osmesa`` (software) or ``glfw`` (a
-display). Without a usable context :class:`GLUnavailableError` says so in one line.
+display). Where the user chose none and no display is set (``DISPLAY``, ``WAYLAND_DISPLAY``),
+vgs renders with EGL (:func:`headless_default`), also when MuJoCo was imported before vgs.
+Without a usable context :class:`GLUnavailableError` says so in one line.
 """
 
 from __future__ import annotations
 
 import os
+import sys
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
@@ -39,12 +42,34 @@ class GLUnavailableError(VGSError):
             "headless machines: set MUJOCO_GL=egl (or MUJOCO_GL=osmesa) before starting")
 
 
+def headless_default() -> None:
+    """Render with EGL where the user chose no back end (``MUJOCO_GL`` unset or empty) and no
+    display is set: sets ``MUJOCO_GL=egl`` for what imports MuJoCo later (worker processes) and,
+    when MuJoCo was imported already (it read the variable then and chose GLFW, which needs a
+    display), gives its renderer EGL's context instead."""
+    if os.environ.get("MUJOCO_GL", "").strip() or os.environ.get("DISPLAY") \
+            or os.environ.get("WAYLAND_DISPLAY") or sys.platform != "linux":
+        return
+    os.environ["MUJOCO_GL"] = "egl"
+    try:
+        from mujoco.rendering.classic import gl_context
+
+        if getattr(gl_context, "_MUJOCO_GL", None) == "":  # imported without a choice
+            from mujoco.egl import GLContext
+
+            gl_context.GLContext = GLContext
+    except (ImportError, OSError, AttributeError):  # no EGL: open_renderer says so
+        pass
+
+
 def open_renderer(model: mujoco.MjModel, width: int, height: int) -> mujoco.Renderer:
-    """A :class:`mujoco.Renderer` for ``model``.
+    """A :class:`mujoco.Renderer` for ``model`` (EGL where no display is set and no back end was
+    chosen, :func:`headless_default`).
 
     Raises:
         GLUnavailableError: If no OpenGL context can be made.
     """
+    headless_default()
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # GLFW's warnings repeat the failure

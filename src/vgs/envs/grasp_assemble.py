@@ -34,10 +34,15 @@ the mass following; one uniform draw per episode.
 
 Every step ends the episode (``terminated=True``); ``info["record"]`` is the episode record
 (``EpisodeRecord.to_row()``: the column names and units of :mod:`vgs.columns`, ``None`` for
-undefined values). ``render_mode="rgb_array"``:
-:meth:`GraspAssembleEnv.render` draws the cell's current state (after ``reset``: the peg on the
-table; after ``step``: the end of the assembly) from the ``perspective`` camera; it needs
-OpenGL (``MUJOCO_GL=egl`` on headless machines) and runs only when called.
+undefined values). Rendering (:meth:`GraspAssembleEnv.render`, from the ``perspective``
+camera, only when called; EGL where no display is set, :func:`vgs.render.headless_default`):
+``render_mode="rgb_array"`` draws the cell's current state (after ``reset``: the peg on the
+table; after ``step``: the end of the assembly); ``"rgb_array_list"`` gives after ``step`` the
+frames of the whole grasp and assembly, drawn from the states the episode recorded (one per
+control tick, ``Trace.qpos``; never drawn inside the physics loop), one every
+``render_speed / metadata["render_fps"]`` simulated seconds, time and phase written on each;
+after ``reset`` the one frame of the peg on the table. The list stays until the next ``reset``
+or ``step``: with Gymnasium's ``RecordVideo`` call ``env.render()`` after the step to record it.
 """
 
 from __future__ import annotations
@@ -61,7 +66,8 @@ from vgs.grasping.rewards import MODES, episode_reward, next_threshold
 from vgs.sim.camera import Heightmap
 
 DEPTH_UNIT = 0.0005  # metres per unit of the uint8 depth observation
-RENDER_MODES = ("rgb_array",)
+RENDER_MODES = ("rgb_array", "rgb_array_list")
+VIDEO_FPS = 15  # frames per second of an rgb_array_list episode (metadata["render_fps"])
 
 
 def make_config(cfg: ExperimentConfig | str | None,
@@ -107,20 +113,22 @@ class GraspAssembleEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         overrides: Configuration overrides by dotted path, e.g. ``{"cell.peg.mass": 0.6}``.
         threshold_s: Fixed assembly-time threshold [s] (sets ``reward.threshold_s``);
             default: the configured one, else derived as in training.
-        render_mode: ``None`` or ``"rgb_array"``.
+        render_mode: ``None``, ``"rgb_array"`` or ``"rgb_array_list"``.
         render_width: Width of rendered frames [px].
         render_height: Height of rendered frames [px].
+        render_speed: Simulated seconds per second of video (``rgb_array_list``).
 
     Raises:
         ConfigError: On a bad mode, condition, render mode or configuration.
     """
 
-    metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": 2}
+    metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": VIDEO_FPS}
 
     def __init__(self, cfg: ExperimentConfig | str | None = None, mode: str = "vgs",
                  condition: str = "nominal", overrides: Mapping[str, Any] | None = None,
                  threshold_s: float | None = None, render_mode: str | None = None,
-                 render_width: int = 480, render_height: int = 360) -> None:
+                 render_width: int = 480, render_height: int = 360,
+                 render_speed: float = 4.0) -> None:
         if mode not in MODES:
             raise ConfigError("mode", f"must be one of {MODES}, got {mode!r}")
         if condition not in CONDITIONS:
@@ -136,6 +144,11 @@ class GraspAssembleEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self.condition = condition
         self.render_mode = render_mode
         self.render_size = (int(render_width), int(render_height))
+        if not (math.isfinite(render_speed) and render_speed > 0):
+            raise ConfigError("render_speed", f"must be > 0, got {render_speed!r}")
+        self.render_speed = float(render_speed)
+        self._trace: Any = None  # the last step's states (rgb_array_list)
+        self._frames: list[np.ndarray] | None = None
         size = cfg.cell.camera.size
         self.observation_space = spaces.Dict({
             "color": spaces.Box(0, 255, (size, size, 3), np.uint8),
@@ -171,6 +184,7 @@ class GraspAssembleEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self._peg = condition_peg(self.cfg, self.condition,
                                   float(self.np_random.uniform(-1.0, 1.0)))
         self.heightmap = self.runner.observe(self._seed, self._peg)
+        self._trace, self._frames = None, None
         return self._obs(self.heightmap), self._info(self.heightmap)
 
     def step(self, action: Any) -> tuple[dict[str, np.ndarray], float, bool, bool,
@@ -183,7 +197,10 @@ class GraspAssembleEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         if not self.action_space.contains(np.array([k, row, col], dtype=np.int64)):
             raise ConfigError("action", f"{(k, row, col)} is outside {self.action_space}")
         command = pixel_command(hm, row, col, action_angle(self.cfg.network, k, hm.depth))
-        record, _, _ = self.runner.run(self._seed, lambda _hm: command, peg=self._peg)
+        listing = self.render_mode == "rgb_array_list"  # record the states to draw them after
+        record, robot, _ = self.runner.run(self._seed, lambda _hm: command, peg=self._peg,
+                                           trace=listing)
+        self._trace, self._frames = (robot.trace if listing else None), None
         time_ok = record.assembly_time if record.success else None
         exploring = self.episodes < self.cfg.agent.random_episodes
         self.threshold_s = next_threshold(self._times, self.threshold_s, time_ok, exploring,
@@ -197,26 +214,50 @@ class GraspAssembleEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         info = {**self._info(hm), "record": row_values, "r_grasp": r_g, "r_assembly": r_am}
         return self._obs(hm), float(r_g + r_am), True, False, info
 
-    def render(self) -> np.ndarray | None:  # type: ignore[override]
-        """The cell's current state from the ``perspective`` camera (``rgb_array`` mode).
+    def render(self) -> np.ndarray | list[np.ndarray] | None:  # type: ignore[override]
+        """The cell from the ``perspective`` camera: its current state (``rgb_array``), or the
+        frames of the last episode (``rgb_array_list``, module docstring).
 
         Raises:
             GLUnavailableError: If no OpenGL context can be made.
         """
         if self.render_mode is None:
             gym.logger.warn("render() called without a render_mode; make the env with "
-                            "render_mode='rgb_array'")
+                            "render_mode='rgb_array' or 'rgb_array_list'")
             return None
+        cell, _ = self.runner.cell(self._peg)
+        renderer = self._scene_renderer()
+        if self.render_mode == "rgb_array":
+            return renderer.frame(cell.data.qpos, cell.data.mocap_pos)
+        if self._frames is None:
+            self._frames = self._episode_frames(renderer, cell.data.qpos, cell.data.mocap_pos)
+        return list(self._frames)
+
+    def _scene_renderer(self) -> Any:
         from vgs.render import SceneRenderer
 
-        cell, _ = self.runner.cell(self._peg)
         key = (self._peg.mass, self._peg.length)
         if self._renderer is None or self._renderer_key != key:
             self.close()
             self._renderer = SceneRenderer(replace(self.cfg.cell, peg=self._peg),
                                            *self.render_size)
             self._renderer_key = key
-        return self._renderer.frame(cell.data.qpos, cell.data.mocap_pos)
+        return self._renderer
+
+    def _episode_frames(self, renderer: Any, qpos: np.ndarray, mocap: np.ndarray
+                        ) -> list[np.ndarray]:
+        """The last step's recorded states drawn, or the current state after a reset."""
+        from vgs.experiments.demo import frame_indices
+        from vgs.render import annotate
+
+        trace = self._trace
+        if trace is None or not trace.qpos:
+            return [renderer.frame(qpos, mocap)]
+        mocap = np.array(mocap, copy=True)
+        indices = frame_indices(np.asarray(trace.time), VIDEO_FPS, self.render_speed)
+        return [annotate(renderer.frame(trace.qpos[i], mocap),
+                         [f"t = {trace.time[i]:5.1f} s (x{self.render_speed:g})",
+                          f"phase: {trace.phase[i]}"]) for i in indices]
 
     def close(self) -> None:
         """Free the renderer's OpenGL context, if one was made."""
