@@ -102,3 +102,22 @@ def test_cli_and_bad_input(tmp_path: Path) -> None:
     assert "policy" in proc.stderr
     with pytest.raises(ConfigError, match="out"):
         export_policy(tmp_path / "run", tmp_path / "p.json")
+
+
+def test_policy_json_maps_pixels_to_the_world_as_vgs_does(tmp_path: Path) -> None:
+    """policy.json's heightmap origin and pixel size, through its documented formula, give the
+    world point vgs's own heightmap gives for the same pixel (issue 42, item 4)."""
+    from vgs.assembly.episode import EpisodeRunner
+
+    cfg = override(override(profile("smoke"), "cell.camera.size", 64),
+                   "cell.camera.pixel_size", 0.007)
+    fake_run(tmp_path / "run", cfg)
+    hm = json.loads(export_policy(tmp_path / "run", tmp_path / "policy.pt")
+                    .description.read_text())["heightmap"]
+    assert "origin_m" in hm["pixel_to_world"]
+    seen = EpisodeRunner(cfg).observe(3)
+    for i, j in [(0, 0), (5, 40), (63, 63), *np.argwhere(seen.depth > 0.005)[:3].tolist()]:
+        x = hm["origin_m"][0] + (j + 0.5) * hm["pixel_size_m"]
+        y = hm["origin_m"][1] + (i + 0.5) * hm["pixel_size_m"]
+        assert (x, y) == pytest.approx(seen.pixel_to_world(i, j), abs=1e-12)
+        assert seen.world_to_pixel(x, y) == (i, j)

@@ -108,3 +108,54 @@ def test_creeping_peg_held_by_the_no_slip_solver(tmp_path: Path) -> None:
     start = data.xpos.copy()
     mujoco.mj_step(model, data, int(round(2.0 / model.opt.timestep)))
     assert np.linalg.norm(data.xpos - start, axis=1).max() < 1e-3
+
+
+def test_the_printed_control_hint_moves_the_joint_it_names(tmp_path: Path) -> None:
+    """``vgs export-scene`` prints how to drive the servos in names; run as printed on the
+    exported file, it turns the joint it names by the value it names, and no other arm joint
+    (issue 42: actuators 0-1 are the fingers)."""
+    import re
+    import subprocess
+    import sys
+
+    path = tmp_path / "scene.xml"
+    proc = subprocess.run([sys.executable, "-m", "vgs.cli", "export-scene", "--out", str(path)],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    hint = re.search(r"(data\.actuator\('(\w+)'\)\.ctrl = ([\d.]+)) turns (\w+) ([\d.]+) rad",
+                     proc.stdout)
+    assert hint, proc.stdout
+    code, actuator, value, joint, turn = hint.groups()
+    assert actuator == joint and value == turn
+    model = mujoco.MjModel.from_xml_path(str(path))
+    data = mujoco.MjData(model)
+    home = {n: float(data.joint(n).qpos[0]) for n in ur5.JOINT_NAMES}
+    exec(code, {"data": data})
+    mujoco.mj_step(model, data, 1000)
+    for name in ur5.JOINT_NAMES:
+        moved = float(data.joint(name).qpos[0]) - home[name]
+        assert moved == pytest.approx(float(value) if name == joint else 0.0, abs=0.01), name
+
+
+def test_documented_weld_carries_the_peg(exported: tuple[Path, Cell]) -> None:
+    """docs/cell.md's lines that switch the stick weld on in plain MuJoCo: the peg then keeps
+    its pose relative to the gripper housing while the arm moves."""
+    import re
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "cell.md").read_text()
+    (lines,) = [b for b in re.findall(r"```python\n(.*?)```", text, flags=re.DOTALL)
+                if "pad_stiction" in b]
+    model = mujoco.MjModel.from_xml_path(str(exported[0]))
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    exec(lines, {"model": model, "data": data, "mujoco": mujoco, "np": np})
+
+    def relative() -> np.ndarray:
+        g, p = data.body("rg2"), data.body("peg")
+        return g.xmat.reshape(3, 3).T @ (p.xpos - g.xpos)
+
+    before, start = relative(), data.body("peg").xpos.copy()
+    data.actuator("shoulder_lift_joint").ctrl = -0.2  # lifts the arm
+    mujoco.mj_step(model, data, 1000)
+    assert np.linalg.norm(data.body("peg").xpos - start) > 0.05  # carried
+    np.testing.assert_allclose(relative(), before, atol=2e-3)

@@ -101,14 +101,14 @@ def _num(value: float | None, digits: int = 2) -> str:
 
 def cmd_export_scene(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     """Write the compiled cell as MJCF and check that MuJoCo loads it."""
-    from vgs.experiments.scene import export_scene
+    from vgs.experiments.scene import CONTROL_HINT, export_scene
 
     info = export_scene(cfg, args.out, seed=args.seed)
     print(f"wrote {info.path} ({info.nbody} bodies, {info.ngeom} geoms, {info.nmesh} meshes, "
           f"{info.nu} actuators, cameras {', '.join(info.cameras)}); it opens at home with the "
           f"peg on the table (seed {args.seed}) and holds still until you act; open it with: "
           f"python -m mujoco.viewer --mjcf {info.path}  (Python: mujoco.MjModel.from_xml_path; "
-          f"ctrl = 0 holds home, ctrl_i = q - q_home_i drives joint i to q)")
+          f"{CONTROL_HINT}; the stick weld pad_stiction is off: docs/cell.md)")
     return 0
 
 

@@ -119,8 +119,9 @@ def _rotation_text(net: GraspQNetwork) -> str:
 
 
 def describe(net: GraspQNetwork, size: int, pixel_size: float,
-             extra: dict[str, Any]) -> dict[str, Any]:
-    """The JSON description of ``net`` for H = W = ``size`` heightmaps."""
+             extra: dict[str, Any], origin: tuple[float, float] | None = None) -> dict[str, Any]:
+    """The JSON description of ``net`` for H = W = ``size`` heightmaps whose pixel (0, 0) has
+    its outer corner at world ``origin`` (x0, y0) [m]."""
     cfg = net.cfg
     head = layer_ops(net.head, "head")
     if net.rotate == "features":  # the angle code joins the features after the first BN-ReLU
@@ -134,6 +135,9 @@ def describe(net: GraspQNetwork, size: int, pixel_size: float,
         "rotate": net.rotate,
         "heightmap": {"size": size, "pixel_size_m": pixel_size,
                       "rows": "world +y", "columns": "world +x",
+                      **({} if origin is None else {"origin_m": [*map(float, origin)]}),
+                      "pixel_to_world": "x = origin_m[0] + (j + 0.5) * pixel_size_m, "
+                                        "y = origin_m[1] + (i + 0.5) * pixel_size_m",
                       "color": "uint8 RGB (H, W, 3)",
                       "depth": "height above the table [m], float (H, W)"},
         "input": "x = [color / 255, depth] (4, H, W), zero-padded to padded_size; rotated; "
@@ -193,11 +197,12 @@ def export_policy(run_dir: Path, out: Path) -> PolicyExport:
     weights = {name: t.detach().to("cpu", torch.float32).contiguous()
                for name, t in net.state_dict().items() if not name.endswith("num_batches_tracked")}
     camera = cfg.cell.camera
+    origin = (camera.center_xy[0] - camera.extent / 2, camera.center_xy[1] - camera.extent / 2)
     description = describe(net, camera.size, camera.pixel_size, {
         "weights": out.name, "source_run": str(run_dir), "mode": meta.get("mode"),
         "trained_episodes": episodes, "torch": torch.__version__,
         "tensors": len(weights), "values": int(sum(t.numel() for t in weights.values())),
-    })
+    }, origin)
     out.parent.mkdir(parents=True, exist_ok=True)
     torch.save(weights, out)
     json_path = out.with_suffix(".json")

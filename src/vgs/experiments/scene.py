@@ -14,17 +14,21 @@ state other than the model's reference configuration ``qpos0`` and no default fo
    at that position, so ``qpos0`` is the settled state while ``qpos`` keeps the meaning it has
    in vgs (UR5 DH joint angles [rad], finger travel from closed [m]).
 3. The peg (free joint) and the hole block (mocap) are placed at their settled poses.
-4. Servos: the eight position servos (six UR5 joints, two RG2 fingers) take their target
-   relative to the home target: ``biasprm[0] = kp * target_home`` and the control range is
-   shifted by ``-target_home``, so ``ctrl = 0`` (MuJoCo's default) holds home, and
-   ``ctrl_i = q - target_home_i`` drives joint i to q. The UR5 servo gains
-   (``controller.joint_kp`` / ``joint_kv``, set by :class:`vgs.sim.cell.Cell` on the compiled
-   model) are written too.
+4. Servos: the eight position servos, each named after the joint it drives (``finger_left``,
+   ``finger_right``, then the six UR5 joints ``shoulder_pan_joint`` ... ``wrist_3_joint``; the
+   fingers come first, so address them by name, not index), take their target relative to the
+   home target: ``biasprm[0] = kp * target_home`` and the control range is shifted by
+   ``-target_home``, so ``ctrl = 0`` (MuJoCo's default) holds home and :data:`CONTROL_HINT`
+   holds. The UR5 servo gains (``controller.joint_kp`` / ``joint_kv``, set by
+   :class:`vgs.sim.cell.Cell` on the compiled model) are written too.
 5. Scenery (:mod:`vgs.sim.scenery`): a floor, table legs and the cameras ``overhead`` (the
    heightmap camera) and ``perspective``; none of it touches anything.
 
-A keyframe ``home`` keeps the same state (``ctrl = 0``) for ``mj_resetDataKeyframe``. The
-hole's wedges are meshes given by inline vertices, so the file needs no asset files. The
+The weld ``pad_stiction`` (gripper housing ``rg2`` to ``peg``) is written switched off: vgs
+switches it in Python while the pads stick (:mod:`vgs.sim.stiction`); docs/cell.md gives the
+lines that switch it on in plain MuJoCo. A keyframe ``home`` keeps the same state
+(``ctrl = 0``) for ``mj_resetDataKeyframe``. The hole's wedges are meshes given by inline
+vertices, so the file needs no asset files. The
 written file is loaded back to check it.
 """
 
@@ -45,6 +49,11 @@ from vgs.sim.scenery import CAMERAS, add_scenery
 HOME_KEY = "home"
 SETTLE_S = 1.0  # simulated seconds the reset state settles before it is written [s]
 SERVO_JOINTS = (*ur5.JOINT_NAMES, "finger_left_joint", "finger_right_joint")
+# How to drive the exported servos, in names (tests/test_scene_export.py runs it).
+CONTROL_HINT = ("ctrl = 0 holds home; each actuator drives the joint of its name (finger_left "
+                "-> finger_left_joint) to its home position plus ctrl, e.g. "
+                "data.actuator('shoulder_lift_joint').ctrl = 0.2 turns shoulder_lift_joint "
+                "0.2 rad from home")
 
 
 @dataclass(frozen=True)
