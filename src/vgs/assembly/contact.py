@@ -2,7 +2,8 @@
 share: the admittance in contact, the peg's estimated axis and lower end, the measured moments
 and the grasp watch. :class:`ContactPhases` is a base of
 :class:`vgs.assembly.strategy.AssemblyModule`, whose docstring states every phase; the
-constants and the exceptions of the strategy live here.
+exceptions of the strategy live here. Every tunable is a field of
+:class:`vgs.config.AssemblyConfig` (``self.cfg``).
 """
 
 from __future__ import annotations
@@ -14,50 +15,6 @@ import numpy as np
 
 from vgs.assembly.spiral import GOLDEN_ANGLE, spiral_points
 from vgs.control.transforms import exp_so3
-
-ROT_DAMPING = 2.5  # lower bound of the rotational admittance damping in contact [N m s/rad]
-CONTACT_DAMPING = 300.0  # lateral admittance damping in contact: 3x the servo-loop minimum [N s/m]
-ENTRY_DEPTH = 0.004  # descent below the three-point height that means "entered the hole" [m]
-SETTLE_TIME = 0.3  # still time before taring [s]
-LENGTH_TOLERANCE = 0.15  # the product data's length tolerance: the transport clears it
-LOST_WIDTH_FRACTION = 0.8  # finger width below this fraction of the diameter: peg lost
-RETRY_LIFT = 0.012  # lift before a new search [m]
-ROT_COMPLIANCE_ANGLE = math.radians(2.0)  # reference lead that loads the grasp to its limit
-SLIDE_SETTLE_TIME = 0.3  # light press on the rim before the slide's bias [s]
-THREE_POINT_FRACTION = 0.5  # of D sin(tilt): the least depth of three-point contact
-CLIMB_TRAVEL = 0.003  # rising this far from the slide's deepest point: climbing out [m]
-THREE_POINT_TIME = 0.3  # moved less than a quarter of the slide speed in this time: still [s]
-MAX_RETRIES = 3  # new searches after a wrong contact-state decision
-ALIGN_STEP = math.radians(3.0)  # largest turn towards upright of one alignment adjustment
-MAX_ALIGN_ADJUSTMENTS = 15  # adjustments in one alignment before it is judged lost
-MAX_INSERT_STALLS = 4  # consecutive stalled wiggles before the insertion is judged lost
-PLANE_CONTACT_MARGIN = 0.004  # plane contact this far beyond the hole's reach [m]
-HOP_HEIGHT = 0.001  # lift of the lowest rim point above the plane between two hops [m]
-HOP_PRESS_TIME = 0.15  # press at each hop before the height is read [s]
-HOP_LIFT_SPEED = 0.02  # speed of the lift before each free-air move [m/s]
-HOP_SPEED = 0.01  # free-air speed between touch-downs [m/s]
-HOP_SETTLE = 0.1  # still time before each touch-down [s]
-HOP_DESCENT_SPEED = 0.003  # speed of each touch-down [m/s]
-
-
-# Touch-downs that can raise the plane's height above the approach's plane contact. Each
-# touch-down presses the rim point beside the pads' line, and at long levers the pads give a
-# little: the peg turned 0.8 deg further into its tilt over one search (-26.25 mm, sweep scene
-# 37), the rim point went 0.3 mm lower against the TCP, and touch-downs on the plane read
-# 0.3 mm high, more than half the drop threshold. The plane is the highest of the approach's
-# contact and the last five touch-downs: a touch-down can sink into the hole, several in a
-# row near the spiral's centre, but not rise above the plane, and one that lands more than
-# half the drop threshold above it has touched something else and is not taken for the
-# plane. Never below the approach's contact, the rule finds every sink the plane contact
-# alone found.
-PLANE_WINDOW = 5
-
-
-# Rotational admittance stiffness of a touch-down [N m/rad]: the 5 N press at the lowest rim
-# point, about 10 mm beside the pads, turns the tool by 0.03 deg; with the contact phases'
-# compliance (6.4 N m/rad) each touch-down on an edge rocked the peg by tenths of a degree.
-HOP_ROT_STIFFNESS = 100.0
-
 
 
 class Recovery(Exception):
@@ -84,7 +41,7 @@ class ContactPhases:
     def _check_grasp(self) -> None:
         """Raise :class:`PegLost` when the fingers have closed past the peg (its nominal
         diameter less a tolerance): the RG2's width reading, the robot's own signal."""
-        if self.robot.gripper.width() < LOST_WIDTH_FRACTION * self.peg.diameter:
+        if self.robot.gripper.width() < self.cfg.lost_width_fraction * self.peg.diameter:
             raise PegLost
 
     def _check_weight(self) -> None:
@@ -111,25 +68,26 @@ class ContactPhases:
 
         Stiffness ``lateral`` in x and y, force control in z, and a rotational stiffness that
         keeps the moment on the grasp below its capacity: a reference that runs
-        ``ROT_COMPLIANCE_ANGLE`` ahead of a jammed peg loads the pads with ``moment_limit``
+        ``rot_compliance_angle_deg`` ahead of a jammed peg loads the pads with ``moment_limit``
         (assembly.moment_limit_fraction of the grasp's capacity); ``k_rot`` overrides it.
 
         Damping: a contact is a spring k_c on the peg; the discrete admittance loop at the
         control period dt stays stable for D > k_c dt on every axis the contact loads
         (the rule of :mod:`vgs.control.admittance`). Translation: at least
-        ``CONTACT_DAMPING`` laterally (``lateral_damping`` where larger: it sets the speed of a
+        ``contact_damping`` laterally (``lateral_damping`` where larger: it sets the speed of a
         force-controlled slide) and ``controller.force_damping`` in z (``z_damping`` where
         larger). Rotation: the lower end in contact is a lateral spring at the lever h below
         the pads, a rotational stiffness k_c h^2 about them (about 250 N m/rad for MuJoCo's
-        4 ms contacts on a 0.55 kg peg at h = 85 mm), so D >= ``ROT_DAMPING``.
+        4 ms contacts on a 0.55 kg peg at h = 85 mm), so D >= ``rot_contact_damping``.
         """
         if k_rot is None:
-            k_rot = self.moment_limit / ROT_COMPLIANCE_ANGLE
-        d_lat = max(CONTACT_DAMPING, lateral_damping or 0.0)
+            k_rot = self.moment_limit / math.radians(self.cfg.rot_compliance_angle_deg)
+        d_lat = max(self.cfg.contact_damping, lateral_damping or 0.0)
         d_z = max(self.robot.cfg.force_damping, z_damping or 0.0)
+        d_rot = self.cfg.rot_contact_damping
         self.robot.arm.admittance.set_stiffness(
             np.array([lateral, lateral, 0.0, k_rot, k_rot, k_rot]),
-            damping=np.array([d_lat, d_lat, d_z, ROT_DAMPING, ROT_DAMPING, ROT_DAMPING]))
+            damping=np.array([d_lat, d_lat, d_z, d_rot, d_rot, d_rot]))
 
     def _watch(self) -> None:
         """Per-tick checks in contact: the finger width, and the peak measured moment."""
@@ -143,17 +101,17 @@ class ContactPhases:
         air to the next point of the spiral around the nominal hole and lowered until the
         contact force reaches ``contact_force``; pressed with ``press_force``, the TCP height
         below the plane's (the approach's plane contact, or the highest of the last
-        ``PLANE_WINDOW`` touch-downs where they landed higher) is the rim point's depth. Deeper than
+        ``plane_window`` touch-downs where they landed higher) is the rim point's depth. Deeper than
         ``drop_threshold``: two-point contact (Figure 2b). Nothing rubs, so no friction turns
         the peg in the pads."""
         robot, cfg = self.robot, self.cfg
         # The approach ended in plane contact with the rim point on the surface: depths are
-        # measured from there, or from the highest of the last PLANE_WINDOW touch-downs where
+        # measured from there, or from the highest of the last plane_window touch-downs where
         # the peg's turn in the pads has raised the plane's TCP height since (a new search
         # starts afresh: the peg may have turned).
         z_contact = robot.arm.tcp_height()
         self.z_plane = z_contact
-        heights: deque[float] = deque(maxlen=PLANE_WINDOW)
+        heights: deque[float] = deque(maxlen=cfg.plane_window)
         # Every new search starts at the centre again, its spiral turned by the golden angle:
         # the hole is likeliest near the nominal centre, and the points of the last spiral led
         # to a wrong contact state.
@@ -177,24 +135,24 @@ class ContactPhases:
         robot.arm.set_compliant(False)
         p = robot.arm.p_ref.copy()
         # Up from where the TCP is (never down into the surface), at least to the plane's.
-        p[2] = max(robot.arm.tcp_height(), p[2], self.z_plane) + HOP_HEIGHT
+        p[2] = max(robot.arm.tcp_height(), p[2], self.z_plane) + cfg.hop_height
         # Back to the search attitude: what the compliance gave way to at the last
         # touch-down must not accumulate.
-        robot.move_to(p, self.R_search, speed=HOP_LIFT_SPEED, settle=0.0)
+        robot.move_to(p, self.R_search, speed=cfg.hop_lift_speed, settle=0.0)
         self._watch()
         p[:2] = tcp_xy
-        robot.move_to(p, self.R_search, speed=HOP_SPEED, settle=HOP_SETTLE)
+        robot.move_to(p, self.R_search, speed=cfg.hop_speed, settle=cfg.hop_settle_time)
         self._watch()
         robot.arm.set_compliant(True)
-        self._comply(0.0, k_rot=HOP_ROT_STIFFNESS)
+        self._comply(0.0, k_rot=cfg.hop_rot_stiffness)
         adm.wrench_des[:] = 0.0
-        adm.wrench_des[2] = -adm.damping[2] * HOP_DESCENT_SPEED
+        adm.wrench_des[2] = -adm.damping[2] * cfg.hop_descent_speed
         while robot.arm.wrench[2] < cfg.contact_force:
             robot.tick()
             self._watch()
             self._check_timeout("search")
         adm.wrench_des[2] = -cfg.press_force
-        n = max(1, int(round(HOP_PRESS_TIME / robot.dt)))
+        n = max(1, int(round(cfg.hop_press_time / robot.dt)))
         for _ in range(n):
             robot.tick()
             self._watch()
@@ -216,7 +174,7 @@ class ContactPhases:
         self._comply(0.0, lateral_damping=cfg.three_point_force / cfg.slide_speed)
         # Settle onto the rim under the light press before the bias.
         adm.wrench_des[:] = [0.0, 0.0, -cfg.slide_press_force, 0.0, 0.0, 0.0]
-        for _ in range(max(1, int(round(SLIDE_SETTLE_TIME / robot.dt)))):
+        for _ in range(max(1, int(round(cfg.slide_settle_time / robot.dt)))):
             robot.tick()
             self._watch()
         self.slide_start = robot.arm.tcp_pose()[0][:2]
@@ -237,7 +195,7 @@ class ContactPhases:
         direction = direction / float(np.linalg.norm(direction))
         adm.wrench_des[:] = [*(cfg.three_point_force * direction), -cfg.slide_press_force,
                              0.0, 0.0, 0.0]
-        window = max(1, int(round(THREE_POINT_TIME / robot.dt)))
+        window = max(1, int(round(cfg.still_time / robot.dt)))
         last = robot.arm.tcp_pose()[0][:2]
         z_low, xy_low = robot.arm.tcp_height(), last
         n = 0
@@ -254,7 +212,7 @@ class ContactPhases:
             if z < z_low:
                 z_low, xy_low = z, xy
             elif (z > z_low + 0.5 * max(self.z_plane - z_low, 2 * cfg.drop_threshold)
-                    and np.linalg.norm(xy - xy_low) > CLIMB_TRAVEL):
+                    and np.linalg.norm(xy - xy_low) > cfg.climb_travel):
                 # Climbing the far edge: the lower face crossed the hole beside its centre,
                 # too shallow for the wall to stop the rim point. Back to where it lay
                 # deepest, to go on across the lead.
@@ -263,7 +221,7 @@ class ContactPhases:
                               robot.arm.R_ref, speed=cfg.slide_speed, settle=0.0)
                 return False
             if n % window == 0:
-                moving = np.linalg.norm(xy - last) > 0.25 * cfg.slide_speed * THREE_POINT_TIME
+                moving = np.linalg.norm(xy - last) > 0.25 * cfg.slide_speed * cfg.still_time
                 last = xy
                 if not moving:
                     self.z_three = robot.arm.tcp_height()
@@ -274,10 +232,11 @@ class ContactPhases:
         """Least descent below the plane contact that three-point contact implies [m]: the
         tilted lower face inside the hole, its lowest rim point against the far wall, the
         opposite rim at the top edge lies ``D sin(tilt)`` (3.1 mm for the nominal 30 mm peg at
-        6 deg) below the plane contact. Half of it: a face across the rim 3 mm beside the
-        hole's axis rests 1.3 mm low, a face over the hole 2.2-2.7 mm."""
+        6 deg) below the plane contact. ``assembly.three_point_fraction`` of it (half): a face
+        across the rim 3 mm beside the hole's axis rests 1.3 mm low, a face over the hole
+        2.2-2.7 mm."""
         tilt = math.radians(self.cfg.search_tilt_deg)
-        return THREE_POINT_FRACTION * self.peg.diameter * math.sin(tilt)
+        return self.cfg.three_point_fraction * self.peg.diameter * math.sin(tilt)
 
     def align(self) -> None:
         """Wiggle alignment (Fig. 3c): each adjustment turns the peg back towards upright about
@@ -286,9 +245,10 @@ class ContactPhases:
         robot, cfg = self.robot, self.cfg
         adm = robot.arm.admittance
         amp = math.radians(cfg.wiggle_amplitude_deg)
+        align_step = math.radians(cfg.align_step_deg)
         # Lateral force control without bias: the hole guides the peg; press down only. Inside
         # the hole the peg touches both walls: a lateral contact far stiffer than the rim on
-        # the face, and at CONTACT_DAMPING the discrete loop chattered between the walls
+        # the face, and at contact_damping the discrete loop chattered between the walls
         # (+-8 N at 14 Hz, wedging a peg tilted 4-5 deg 12 mm deep). The alignment damps its
         # lateral axes like the force-controlled z axis (controller.force_damping).
         robot.arm.absorb_offset()
@@ -297,11 +257,11 @@ class ContactPhases:
         n_wiggle = max(2, int(round(cfg.wiggle_period / robot.dt)))
         start_adjustments = self.adjustments
         while True:
-            if self.adjustments - start_adjustments >= MAX_ALIGN_ADJUSTMENTS:
+            if self.adjustments - start_adjustments >= cfg.max_align_adjustments:
                 raise Recovery
             robot.arm.absorb_offset()
-            # Rotate back towards upright, at most ALIGN_STEP per adjustment.
-            step = max(-ALIGN_STEP, min(ALIGN_STEP, -self._tilt(robot.arm.R_ref)))
+            # Rotate back towards upright, at most align_step_deg per adjustment.
+            step = max(-align_step, min(align_step, -self._tilt(robot.arm.R_ref)))
             self._rotate_about_tip(step, n_wiggle // 2)
             # One wiggle: +amp, -amp, back, about the estimated lower end.
             for sgn in (1.0, -2.0, 1.0):
@@ -310,7 +270,7 @@ class ContactPhases:
             z = robot.arm.tcp_pose()[0][2]
             # Aligned (paper eq. 1): the tool's tilt, from the measured joint angles, is under
             # delta, the peg has slid into the hole and the contact moment has relaxed.
-            if (z < self.z_three - ENTRY_DEPTH and abs(self._moment()) < self.aligned_moment
+            if (z < self.z_three - cfg.entry_depth and abs(self._moment()) < self.aligned_moment
                     and abs(self._tilt(robot.arm.tcp_pose()[1])) < self.delta):
                 return
             self._check_timeout("align")
@@ -350,11 +310,11 @@ class ContactPhases:
         robot.arm.absorb_offset()
         adm.wrench_des[:] = [0.0, 0.0, -cfg.press_force, 0.0, 0.0, 0.0]
         # Compliance in the lateral axes and force control in rotation (K = 0: the offset turns
-        # at M / ROT_DAMPING until the walls' moment vanishes) let the hole guide the peg, also
-        # where it leans across the pinch axis, which the wiggle does not turn: a grasp whose
-        # jaws lay phi off the peg's axis holds it so (the pads lock that angle in). With the
-        # stiffness of the other phases the lean stayed above delta and the insertion jammed
-        # from phi = 5 deg (benchmarks/probe_jaw_misalignment.py, docs/training.md).
+        # at M / rot_contact_damping until the walls' moment vanishes) let the hole guide the
+        # peg, also where it leans across the pinch axis, which the wiggle does not turn: a
+        # grasp whose jaws lay phi off the peg's axis holds it so (the pads lock that angle in).
+        # With the stiffness of the other phases the lean stayed above delta and the insertion
+        # jammed from phi = 5 deg (benchmarks/probe_jaw_misalignment.py, docs/training.md).
         self._comply(cfg.insert_stiffness, k_rot=0.0)
         z_target = self.z_contact - self.cfg.insertion_depth - 0.003
         last_z = robot.arm.tcp_pose()[0][2]
@@ -371,7 +331,7 @@ class ContactPhases:
                 # Stalled (jammed): one more wiggle adjustment; several in a row mean the peg
                 # is not in the hole at all (a wrong contact-state decision).
                 stalls += 1
-                if stalls > MAX_INSERT_STALLS:
+                if stalls > cfg.max_insert_stalls:
                     raise Recovery
                 for sgn in (1.0, -2.0, 1.0):
                     self._rotate_about_tip(sgn * amp, n_wiggle // 4)

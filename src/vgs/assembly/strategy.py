@@ -25,24 +25,26 @@ peg is held and does not estimate it. docs/assembly.md states every phase with i
     centre: the lowest rim point is lifted, carried in free air to the next point and lowered
     until the contact force reaches ``contact_force``, pressed with ``press_force``. Sunk by
     ``drop_threshold`` below the plane (the approach's plane contact, or the highest of the last
-    five touch-downs where the peg's turn in the pads has raised the plane's TCP height since):
+    ``plane_window`` touch-downs where the peg's turn in the pads has raised the plane's TCP
+    height since):
     the rim point is in the hole, two-point contact (Figure 2b). Nothing rubs, so no friction
     turns the peg in the pads.
 ``slide``
     Pressing lightly with free lateral axes, a lateral bias along the tilt plane (lowest rim
     point leading) slides the peg until the rim point meets the wall and the tilted face, now
-    over the hole, falls in: the TCP at rest below the plane contact by a third of
-    ``D sin(tilt)`` is three-point contact (Figure 2c). At rest with the face across the rim,
-    the bias turns 45 deg to either side and the rim point follows the wall. Back at the plane's
-    height, or further than a diameter: the wrong contact state, search again.
+    over the hole, falls in: the TCP at rest below the plane contact by
+    ``three_point_fraction`` (half) of ``D sin(tilt)`` is three-point contact (Figure 2c). At
+    rest with the face across the rim, the bias turns 45 deg to either side and the rim point
+    follows the wall. Back at the plane's height, or further than a diameter: the wrong contact
+    state, search again.
 ``align``
     Wiggle alignment: each adjustment rotates the peg back towards upright about its nominal
-    lower end (at most 3 deg), superposes one wiggle, each rotation stopped at the moment limit,
-    and checks whether the tool's tilt is under ``delta = arctan(clearance / K)`` (eq. 1), the
-    peg has slid into the hole (TCP below the three-point height by ``ENTRY_DEPTH``) and the
-    moment has relaxed. The measured moment contains the peg's gravitational and inertial
-    disturbing moments about the pads (paper eq. 2, 3), which depend on where the peg is held:
-    the controller cannot tell them from contact moments.
+    lower end (at most ``align_step_deg``), superposes one wiggle, each rotation stopped at the
+    moment limit, and checks whether the tool's tilt is under ``delta = arctan(clearance / K)``
+    (eq. 1), the peg has slid into the hole (TCP below the three-point height by
+    ``entry_depth``) and the moment has relaxed. The measured moment contains the peg's
+    gravitational and inertial disturbing moments about the pads (paper eq. 2, 3), which depend
+    on where the peg is held: the controller cannot tell them from contact moments.
 ``insert``
     Force-controlled push to the insertion depth K; a stall triggers one more wiggle adjustment.
     Then the gripper opens and the arm retracts.
@@ -60,11 +62,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from vgs.assembly.contact import (
-    LENGTH_TOLERANCE,
-    MAX_RETRIES,
-    PLANE_CONTACT_MARGIN,
-    RETRY_LIFT,
-    SETTLE_TIME,
     ContactPhases,
     PegLost,
     PhaseTimeout,
@@ -176,7 +173,7 @@ class AssemblyModule(ContactPhases):
                     # Back to the approach: lift, stand the peg upright, search again here.
                     self._end(phase)
                     self.retries += 1
-                    if self.retries > MAX_RETRIES:
+                    if self.retries > self.cfg.max_retries:
                         raise PhaseTimeout(phase) from None
                     k = 1
                     continue
@@ -212,8 +209,8 @@ class AssemblyModule(ContactPhases):
         return PegEstimate(weight=weight, down_sign=sign, hanging=0.5 * self.peg.length)
 
     def transport(self) -> None:
-        robot = self.robot
-        robot.run(SETTLE_TIME)
+        robot, cfg = self.robot, self.cfg
+        robot.run(cfg.settle_time)
         self._check_grasp()
         est = self.estimate = self.estimate_peg()
         p0, R0 = robot.arm.tcp_pose()
@@ -233,7 +230,7 @@ class AssemblyModule(ContactPhases):
         # every tilt, lean and slide below is the same motion for both.
         self.tilt_axis = est.down_sign * R_asm[:, 1]
         # High enough for the longest peg the product data allows with the pads at its end.
-        clearance = self.peg.length * (1.0 + LENGTH_TOLERANCE) + 0.01
+        clearance = self.peg.length * (1.0 + cfg.length_tolerance) + 0.01
         target = np.array([*self.hole_xy, self.surface_z + clearance])
         lift = p0 + np.array([0.0, 0.0, 0.06])
         robot.move_to(lift, R_yaw, speed=0.2, angular_speed=1.5, settle=0.0)
@@ -246,7 +243,7 @@ class AssemblyModule(ContactPhases):
         # 15 mm.
         robot.move_to(above, R_asm, speed=0.12, angular_speed=0.6, settle=0.0)
         self._check_timeout("transport")
-        robot.move_to(target, R_asm, speed=0.15, angular_speed=1.2, settle=SETTLE_TIME)
+        robot.move_to(target, R_asm, speed=0.15, angular_speed=1.2, settle=cfg.settle_time)
         self._check_grasp()
         self._check_timeout("transport")
 
@@ -259,10 +256,10 @@ class AssemblyModule(ContactPhases):
         else:
             # Recovery: out of the hole first (above the first plane contact), then turn.
             p = robot.arm.p_ref.copy()
-            p[2] = max(p[2] + RETRY_LIFT, self.z_contact + RETRY_LIFT)
+            p[2] = max(p[2] + cfg.retry_lift, self.z_contact + cfg.retry_lift)
             robot.move_to(p, robot.arm.R_ref, speed=0.02, settle=0.0)
             robot.move_to(robot.arm.p_ref, self.R_asm, speed=0.02, angular_speed=0.3,
-                          settle=SETTLE_TIME)
+                          settle=cfg.settle_time)
             self._check_weight()
         self._check_grasp()
         p, R = robot.arm.p_ref.copy(), self.R_asm.copy()
@@ -277,15 +274,16 @@ class AssemblyModule(ContactPhases):
         # the nominal centre than the hole's radius plus its largest displacement (its radius).
         rim = self._lowest_rim_offset(R_tilt)
         lead = rim[:2] / max(float(np.linalg.norm(rim[:2])), 1e-9)
-        target_xy = self.hole_xy + (2.0 * self.hole_radius + PLANE_CONTACT_MARGIN) * lead
+        target_xy = self.hole_xy + (2.0 * self.hole_radius + cfg.plane_contact_margin) * lead
         # Place the lowest rim point above the target at the start height.
         low = tip + rim
         # Down to where the longest peg the product data allows, held at its end, would be
         # approach_height above the surface.
-        longest = self.peg.length * (1.0 + LENGTH_TOLERANCE) - PAD_HALF[0]
+        longest = self.peg.length * (1.0 + cfg.length_tolerance) - PAD_HALF[0]
         z_start = self.surface_z + cfg.approach_height + longest + (p_tilt - tip)[2]
         shift = np.array([*(target_xy - low[:2]), min(z_start - p_tilt[2], 0.0)])
-        robot.move_to(p_tilt + shift, R_tilt, speed=0.05, angular_speed=0.5, settle=SETTLE_TIME)
+        robot.move_to(p_tilt + shift, R_tilt, speed=0.05, angular_speed=0.5,
+                      settle=cfg.settle_time)
         self.low_rim_from_tcp = (low + shift) - (p_tilt + shift)
         robot.arm.set_compliant(True)
         adm = robot.arm.admittance

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from vgs.config.checks import _non_negative, _positive
+from vgs.config.checks import _fraction, _non_negative, _positive
 from vgs.errors import ConfigError
 
 
@@ -105,6 +105,60 @@ class AssemblyConfig:
             of it over 0.25 s counts as a stall (the push itself is force-controlled: 5 N at
             1500 N s/m moves the peg at about 3.3 mm/s when nothing resists).
         timeouts: Per-phase timeouts in simulated seconds.
+        rot_contact_damping: Least rotational admittance damping in contact [N m s/rad]. The
+            lower end in contact is a lateral spring k_c at the lever h below the pads, a
+            rotational stiffness k_c h^2 about them (about 250 N m/rad for MuJoCo's 4 ms
+            contacts on a 0.55 kg peg at h = 85 mm); the discrete admittance loop at the
+            control period dt stays stable for D > k_c h^2 dt (:mod:`vgs.control.admittance`).
+        contact_damping: Least lateral admittance damping in contact [N s/m]: 3x the
+            servo-loop minimum D > k_c dt of a contact spring k_c on the peg.
+        entry_depth: Descent of the TCP below the three-point height that means the peg has
+            entered the hole, one condition of the alignment's end [m].
+        settle_time: Still time before each tare and after the transport's and the approach's
+            moves [s].
+        length_tolerance: The product data's length tolerance, a fraction of the nominal
+            length: the transport and the approach clear the longest peg it allows.
+        lost_width_fraction: The grasp watch: a finger width below this fraction of the peg's
+            nominal diameter means the peg is lost.
+        retry_lift: Lift of the TCP, above the first plane contact at least, before a new
+            search [m].
+        rot_compliance_angle_deg: Reference lead [deg] that loads the grasp to its moment
+            limit: the rotational stiffness in contact is the limit over this angle (kept in
+            degrees like the other angles; the controller converts it with ``math.radians``).
+        slide_settle_time: Light press on the rim before the slide's bias [s].
+        three_point_fraction: Fraction of ``D sin(tilt)`` (3.1 mm for the nominal 30 mm peg at
+            6 deg) that the TCP at rest must lie below the plane contact for three-point
+            contact: the tilted face inside the hole, its lowest rim point at the far wall,
+            rests ``D sin(tilt)`` low; a face across the rim 3 mm beside the hole's axis 1.3
+            mm, a face over the hole 2.2-2.7 mm.
+        climb_travel: Lateral travel from the slide's deepest point, while rising, that means
+            the peg climbs the far edge [m].
+        still_time: Window of the slide's rest test [s]: moved less than a quarter of
+            ``slide_speed`` over it, the TCP is still.
+        max_retries: New searches after a wrong contact-state decision before the assembly
+            gives up (a time-out of the phase that found it).
+        align_step_deg: Largest turn towards upright of one alignment adjustment [deg]
+            (converted with ``math.radians``).
+        max_align_adjustments: Adjustments in one alignment before it is judged lost (a new
+            search).
+        max_insert_stalls: Consecutive stalled wiggles before the insertion is judged lost (a
+            new search).
+        plane_contact_margin: The approach's plane contact lies this far beyond the hole's
+            reach (twice its radius from the nominal centre) [m].
+        plane_window: Touch-downs whose highest (with the approach's plane contact) is the
+            plane's height: at long levers the pads give a little and the peg turns further
+            into its tilt over a search (0.8 deg, touch-downs 0.3 mm high at -26.25 mm); a
+            touch-down more than half ``drop_threshold`` above the plane is not taken for it.
+        hop_height: Lift of the lowest rim point above the plane between two touch-downs [m].
+        hop_press_time: Press at each touch-down before the height is read [s].
+        hop_lift_speed: Speed of the lift before each free-air move of the search [m/s].
+        hop_speed: Free-air speed between touch-downs [m/s].
+        hop_settle_time: Still time before each touch-down [s].
+        hop_descent_speed: Speed of each touch-down's force-controlled descent [m/s].
+        hop_rot_stiffness: Rotational admittance stiffness of a touch-down [N m/rad]: the 5 N
+            press at the lowest rim point, about 10 mm beside the pads, turns the tool by 0.03
+            deg; with the contact phases' compliance (6.4 N m/rad) each touch-down on an edge
+            rocked the peg by tenths of a degree.
     """
 
     insertion_depth: float = 0.030
@@ -126,6 +180,31 @@ class AssemblyConfig:
     wiggle_period: float = 3.0
     insert_speed: float = 0.003
     hop_step: float = 0.006
+    rot_contact_damping: float = 2.5
+    contact_damping: float = 300.0
+    entry_depth: float = 0.004
+    settle_time: float = 0.3
+    length_tolerance: float = 0.15
+    lost_width_fraction: float = 0.8
+    retry_lift: float = 0.012
+    rot_compliance_angle_deg: float = 2.0
+    slide_settle_time: float = 0.3
+    three_point_fraction: float = 0.5
+    climb_travel: float = 0.003
+    still_time: float = 0.3
+    max_retries: int = 3
+    align_step_deg: float = 3.0
+    max_align_adjustments: int = 15
+    max_insert_stalls: int = 4
+    plane_contact_margin: float = 0.004
+    plane_window: int = 5
+    hop_height: float = 0.001
+    hop_press_time: float = 0.15
+    hop_lift_speed: float = 0.02
+    hop_speed: float = 0.01
+    hop_settle_time: float = 0.1
+    hop_descent_speed: float = 0.003
+    hop_rot_stiffness: float = 100.0
     timeouts: tuple[tuple[str, float], ...] = (
         ("transport", 20.0),
         ("approach", 20.0),
@@ -147,6 +226,23 @@ class AssemblyConfig:
                               f"must lie in (0, 1], got {self.moment_limit_fraction!r}")
         _non_negative(self, "search_tilt_deg", "wiggle_amplitude_deg",
                       prefix="assembly.")
+        _positive(
+            self, "rot_contact_damping", "contact_damping", "rot_compliance_angle_deg",
+            "still_time", "align_step_deg", "hop_lift_speed", "hop_speed", "hop_descent_speed",
+            "hop_rot_stiffness", prefix="assembly.",
+        )
+        _non_negative(
+            self, "entry_depth", "settle_time", "length_tolerance", "retry_lift",
+            "slide_settle_time", "climb_travel", "plane_contact_margin", "hop_height",
+            "hop_press_time", "hop_settle_time", prefix="assembly.",
+        )
+        _fraction(self, "lost_width_fraction", "three_point_fraction", prefix="assembly.")
+        for name, least in (("max_retries", 0), ("max_align_adjustments", 1),
+                            ("max_insert_stalls", 0), ("plane_window", 1)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < least:
+                raise ConfigError(f"assembly.{name}",
+                                  f"must be an integer >= {least}, got {value!r}")
         for name, value in self.timeouts:
             if value <= 0:
                 raise ConfigError(f"assembly.timeouts.{name}", f"must be > 0, got {value}")
