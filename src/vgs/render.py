@@ -47,10 +47,11 @@ def headless_default() -> None:
     display is set: sets ``MUJOCO_GL=egl`` for what imports MuJoCo later (worker processes) and,
     when MuJoCo was imported already (it read the variable then and chose GLFW, which needs a
     display), gives its renderer EGL's context instead."""
-    if os.environ.get("MUJOCO_GL", "").strip() or os.environ.get("DISPLAY") \
-            or os.environ.get("WAYLAND_DISPLAY") or sys.platform != "linux":
+    if os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY") \
+            or sys.platform != "linux" or os.environ.get("MUJOCO_GL", "").strip() not in ("",
+                                                                                      "egl"):
         return
-    os.environ["MUJOCO_GL"] = "egl"
+    os.environ["MUJOCO_GL"] = "egl"  # (also where vgs's command line set it after the import)
     try:
         from mujoco.rendering.classic import gl_context
 
@@ -182,6 +183,27 @@ def annotate(image: np.ndarray, lines: Sequence[str]) -> np.ndarray:
     for i, line in enumerate(lines):
         draw.text((6, 4 + i * line_h), line, fill=(255, 255, 255, 255), font=font)
     return np.asarray(img)
+
+
+def require_video_writer(path: str | Path) -> None:
+    """Check before a long episode that ``path``'s format can be written.
+
+    Raises:
+        ConfigError: ``video`` on another suffix than .mp4/.gif, or an .mp4 without imageio
+            and imageio-ffmpeg (``pip install 'vgs[video]'``).
+    """
+    suffix = Path(path).suffix.lower()
+    if suffix not in VIDEO_SUFFIXES:
+        raise ConfigError("video", f"{Path(path).name}: the file must end in .mp4 or .gif")
+    if suffix == ".mp4":
+        try:
+            import imageio.v2  # noqa: F401
+            import imageio_ffmpeg
+
+            imageio_ffmpeg.get_ffmpeg_exe()
+        except (ImportError, RuntimeError) as exc:
+            raise ConfigError("video", f"MP4 needs imageio and imageio-ffmpeg ({exc}); pip "
+                                       "install 'vgs[video]', or write a .gif") from None
 
 
 def write_video(path: str | Path, frames: Sequence[np.ndarray], fps: float) -> Path:

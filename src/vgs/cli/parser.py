@@ -83,6 +83,10 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--offset", type=float, default=0.0, metavar="MM",
                       help="grasp offset from the visible peg centre along its axis [mm] "
                            "(default: 0, the centre heuristic)")
+    demo.add_argument("--policy", metavar="POLICY",
+                      help="grasp with this policy instead: a training run or policy folder "
+                           "(its Q heat map beside the video and in the figure), random, center "
+                           "or module:function, choosing as vgs evaluate does")
     demo.add_argument("--video", metavar="FILE",
                       help="also render the episode from the perspective camera to FILE (.mp4 "
                            "or .gif), phase and F/T reading on every frame; needs OpenGL "
@@ -189,6 +193,10 @@ def build_parser() -> argparse.ArgumentParser:
     _parallel_flags(evaluate)
     evaluate.add_argument("--out", required=True, help="output folder (started again: resumes)")
     evaluate.add_argument("--json", action="store_true", help="print the summary as JSON")
+    evaluate.add_argument("--videos", type=int, default=0, metavar="N",
+                          help="afterwards, run the first N test episodes again by their seeds "
+                               "and render them to OUT/videos/ (the policy's Q map beside; "
+                               "needs OpenGL) (default: 0)")
     evaluate.set_defaults(func=cmd_evaluate)
 
     repro = sub.add_parser("reproduce",

@@ -26,14 +26,15 @@ def cmd_demo(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     if args.video:
         check_video_name(args.video)
         headless_gl_default()  # before anything imports mujoco
-        from vgs.render import require_gl
+        from vgs.render import require_gl, require_video_writer
 
-        require_gl()  # before the episode, not after it
+        require_video_writer(args.video)  # before the episode, not after it
+        require_gl()
     from vgs.experiments.demo import format_report, run_demo
     from vgs.experiments.plots import demo_figure
 
     seed = cfg.seed if args.seed is None else args.seed
-    result = run_demo(cfg, seed, args.offset / 1000.0)
+    result = run_demo(cfg, seed, args.offset / 1000.0, policy=args.policy)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     figure = demo_figure(result, out / "demo.png")
@@ -146,10 +147,22 @@ def cmd_evaluate(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     from vgs.experiments.evaluate import EvalSpec, evaluate, summarize
 
     episodes = cfg.eval.episodes if args.episodes is None else args.episodes
+    if args.videos < 0:
+        raise ConfigError("videos", f"must be >= 0, got {args.videos}")
+    if args.videos:
+        headless_gl_default()  # before anything imports mujoco
+        from vgs.render import require_gl
+
+        require_gl()  # before the evaluation, not after it
     spec = EvalSpec(args.policy, args.condition, episodes,
                     cfg.reproduce.eval_seed if args.seed is None else args.seed)
     df = evaluate(cfg, spec, Path(args.out), workers=args.workers, backend=args.backend,
                   ray_address=args.ray_address, progress=not args.no_progress)
+    videos = []
+    if args.videos:
+        from vgs.experiments.demo import evaluation_videos
+
+        videos = evaluation_videos(cfg, spec, Path(args.out), args.videos, df)
     s = summarize(df)
     if args.json:
         print(dumps(s, indent=2))
@@ -163,6 +176,8 @@ def cmd_evaluate(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     if s["failure_reasons"]:
         print("failures: " + ", ".join(f"{k} x{v}" for k, v in s["failure_reasons"].items()))
     print(f"wrote {Path(args.out) / 'episodes.parquet'} (and .csv, summary.json)")
+    if videos:
+        print(f"videos {', '.join(str(v) for v in videos)}")
     return 0
 
 

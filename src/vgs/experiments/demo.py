@@ -1,7 +1,11 @@
 """One whole episode for people to look at: look, grasp, assemble, with the signals traced.
 
+The grasp comes from the centre heuristic (with an ``offset`` along the peg), or from any
+evaluation policy (:func:`vgs.experiments.policies.load_policy`: ``center``, ``random``, a
+training run or policy folder), drawn as ``vgs evaluate`` draws it for the same episode seed.
 :func:`demo_video` draws the traced episode afterwards, from its recorded states, as a video
-with the phase and the wrist F/T reading written on every frame.
+with the phase and the wrist F/T reading written on every frame and, beside it, what the
+policy saw: its Q heat map (a trained network) or the depth heightmap, with the chosen grasp.
 """
 
 from __future__ import annotations
@@ -9,6 +13,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -34,6 +39,10 @@ class DemoResult:
         nominal_hole_xy: Nominal hole centre, where the search starts [m].
         hole_radius: Hole radius [m].
         peg_radius: Peg radius [m].
+        policy: The policy's name (``center``, ``random``, the run's mode, ...).
+        q_map: The Q map (H, W) the grasp was chosen from (the chosen rotation's, for the
+            rotation action), or None for a policy without one.
+        pixel: The chosen pixel (row, col), or None where the policy chose no pixel.
     """
 
     record: EpisodeRecord
@@ -44,6 +53,9 @@ class DemoResult:
     nominal_hole_xy: np.ndarray
     hole_radius: float
     peg_radius: float
+    policy: str = "center"
+    q_map: np.ndarray | None = None
+    pixel: tuple[int, int] | None = None
 
 
 def check_offset(offset: float, peg: PegConfig) -> None:
@@ -54,31 +66,66 @@ def check_offset(offset: float, peg: PegConfig) -> None:
                                     f"for |offset| <= {limit * 1000:.1f} mm")
 
 
-def run_demo(cfg: ExperimentConfig, seed: int, offset: float = 0.0) -> DemoResult:
-    """Run one traced episode grasping ``offset`` metres from the visible peg centre.
+def run_demo(cfg: ExperimentConfig, seed: int, offset: float = 0.0, policy: str | None = None,
+             peg: PegConfig | None = None) -> DemoResult:
+    """Run one traced episode.
 
     Args:
         cfg: Experiment configuration.
         seed: Episode seed.
-        offset: Grasp offset along the visible peg axis [m]; 0 is the centre heuristic.
+        offset: Grasp offset along the visible peg axis [m] for the centre heuristic (no
+            ``policy``); 0 is the centre.
+        policy: A policy spec (:func:`vgs.experiments.policies.load_policy`); it chooses as in
+            ``vgs evaluate`` (its generator seeded ``[seed, 2]``), so an evaluation's episode
+            of that seed and peg is the same episode.
+        peg: The episode's peg (default: the configured one).
 
     Raises:
-        ConfigError: If the offset puts the pads off the peg.
+        ConfigError: If the offset puts the pads off the peg, an offset comes with a policy, or
+            the policy spec names nothing usable.
     """
     check_offset(offset, cfg.cell.peg)
     runner = EpisodeRunner(cfg)
-    policy = offset_policy(offset)
-    record, robot, hm = runner.run(seed, policy, trace=True)
+    chosen: dict[str, Any] = {}
+    if policy is None:
+        grasp = offset_policy(offset)
+        name = "center" if offset == 0 else f"center {offset * 1000:+g} mm"
+    else:
+        if offset != 0:
+            raise ConfigError("offset", "applies to the centre heuristic; leave it out with "
+                                        "--policy")
+        from vgs.experiments.policies import load_policy
+
+        chooser = load_policy(policy, cfg)
+        name = str(getattr(chooser, "label", policy))
+        rng = np.random.default_rng([seed, 2])  # as vgs evaluate draws it
+
+        def grasp(hm: Heightmap) -> GraspCommand:
+            decision = chooser(hm, rng)
+            chosen["decision"] = decision
+            return decision.command
+
+    record, robot, hm = runner.run(seed, grasp, peg=peg, trace=True)
+    decision = chosen.get("decision")
+    command = decision.command if decision is not None else offset_policy(offset)(hm)
+    pixel = (decision.row, decision.col) if decision is not None and decision.row >= 0 else None
+    q_map = None
+    agent = getattr(chooser, "agent", None) if policy is not None else None
+    if agent is not None and pixel is not None:
+        q_map = agent.q_values(hm.color, hm.depth)[max(decision.rotation, 0)]
     cell = robot.cell
     return DemoResult(
         record=record,
         trace=robot.trace,
         heightmap=hm,
-        command=policy(hm),
+        command=command,
         hole_xy=np.array(cell.hole_xy, dtype=float),
         nominal_hole_xy=np.array(cfg.cell.hole.nominal_xy, dtype=float),
         hole_radius=cfg.cell.hole.radius,
-        peg_radius=cfg.cell.peg.radius,
+        peg_radius=(peg or cfg.cell.peg).radius,
+        policy=name,
+        q_map=q_map,
+        pixel=pixel,
     )
 
 
@@ -128,7 +175,8 @@ def frame_text(result: DemoResult, index: int, speed: float) -> list[str]:
     f = trace.wrench[index][:3]
     m = trace.wrench[index][3:]
     return [
-        f"seed {result.record.seed}   t = {trace.time[index]:5.1f} s  (x{speed:g})",
+        f"{result.policy}, seed {result.record.seed}   t = {trace.time[index]:5.1f} s  "
+        f"(x{speed:g})",
         f"phase: {trace.phase[index]}",
         f"F [N]    {f[0]:+6.1f} {f[1]:+6.1f} {f[2]:+6.1f}",
         f"M [N m]  {m[0]:+6.2f} {m[1]:+6.2f} {m[2]:+6.2f}",
@@ -142,9 +190,47 @@ def outcome_text(record: EpisodeRecord) -> str:
     return f"not assembled ({record.failure_reason})"
 
 
+def policy_panel(result: DemoResult, size: int, half: float = 0.08) -> np.ndarray:
+    """What the policy saw, as an RGB uint8 (size, size, 3) image: its Q heat map over the
+    heightmap (a trained network) or the depth heightmap (a heuristic), cropped to a square of
+    side ``2 half`` [m] around the grasp, with the chosen grasp marked (pads and point)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    hm, c = result.heightmap, result.command
+    h, w = hm.depth.shape
+    x0, y0 = hm.origin
+    ext = [1000 * x0, 1000 * (x0 + w * hm.pixel_size), 1000 * y0, 1000 * (y0 + h * hm.pixel_size)]
+    fig = Figure(figsize=(size / 100, size / 100), dpi=100, layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    if result.q_map is not None:
+        ax.imshow(hm.color, origin="lower", extent=ext)
+        q = np.ma.masked_where(hm.depth <= 0.005, result.q_map)  # the pixels it chose among
+        ax.imshow(q, origin="lower", extent=ext, cmap="inferno", alpha=0.85)
+        title = f"{result.policy}: Q map on the peg, grasp"
+    else:
+        ax.imshow(1000 * hm.depth, origin="lower", extent=ext, cmap="viridis")
+        title = f"{result.policy}: depth heightmap, grasp"
+    along = np.array([math.cos(c.yaw), math.sin(c.yaw)])
+    across = np.array([-along[1], along[0]])
+    for side in (-1.0, 1.0):
+        mid = np.array([c.x, c.y]) + side * (result.peg_radius + 0.003) * across
+        ends = 1000 * np.array([mid - PAD_HALF[0] * along, mid + PAD_HALF[0] * along])
+        ax.plot(ends[:, 0], ends[:, 1], color="cyan", lw=3, solid_capstyle="butt")
+    ax.plot(1000 * c.x, 1000 * c.y, "+", color="cyan", ms=10, mew=2)
+    ax.set(xlim=(1000 * (c.x - half), 1000 * (c.x + half)),
+           ylim=(1000 * (c.y - half), 1000 * (c.y + half)), xticks=[], yticks=[])
+    ax.set_title(title, fontsize=8)
+    fig.canvas.draw()
+    image = np.asarray(fig.canvas.buffer_rgba())[:size, :size, :3]
+    return np.pad(image, ((0, size - image.shape[0]), (0, size - image.shape[1]), (0, 0)),
+                  constant_values=255)
+
+
 def demo_video(result: DemoResult, cell: CellConfig, path: str | Path, fps: float = 15.0,
                speed: float = 4.0, width: int = 480, height: int = 360,
-               hold_s: float = 1.5) -> Path:
+               hold_s: float = 1.5, panel: bool | None = None) -> Path:
     """Render a traced episode from the ``perspective`` camera and write it as a video.
 
     The states recorded per control tick (``trace.qpos``) are drawn after the episode, one
@@ -161,6 +247,8 @@ def demo_video(result: DemoResult, cell: CellConfig, path: str | Path, fps: floa
         width: Frame width [px].
         height: Frame height [px].
         hold_s: Seconds the last frame is shown.
+        panel: Put :func:`policy_panel` (height x height px) to the right of every frame
+            (default: where the policy has a Q map, a trained network).
 
     Returns:
         The written file.
@@ -191,4 +279,53 @@ def demo_video(result: DemoResult, cell: CellConfig, path: str | Path, fps: floa
     finally:
         renderer.close()
     frames += [final] * max(1, int(round(hold_s * fps)))
+    if panel or (panel is None and result.q_map is not None):
+        side = policy_panel(result, height)
+        frames = [np.concatenate([f, side], axis=1) for f in frames]
     return write_video(path, frames, fps)
+
+
+def evaluation_videos(cfg: ExperimentConfig, spec: Any, out: Path, count: int,
+                      rows: Any = None, **video: Any) -> list[Path]:
+    """Videos of the first ``count`` test episodes of an evaluation, made after it: each
+    episode is run again by its seed and peg with a trace (:func:`run_demo`, the policy
+    choosing as in the evaluation) and drawn from its recorded states (:func:`demo_video`) to
+    ``out/videos/episode_<index>.mp4`` (``.gif`` without the MP4 writer). Nothing is drawn or
+    traced inside the evaluation.
+
+    Args:
+        cfg: The evaluation's configuration.
+        spec: Its :class:`vgs.experiments.evaluate.EvalSpec`.
+        out: Its folder.
+        count: Episodes to draw (the first ones, in index order).
+        rows: The evaluation's table (``index``, ``assembly_time_s``); an episode whose second
+            run ends otherwise is reported on stderr.
+        **video: Keyword arguments of :func:`demo_video` (fps, speed, width, height).
+
+    Returns:
+        The written videos.
+    """
+    import sys
+    from dataclasses import replace
+
+    from vgs.experiments.evaluate import plan_episodes
+    from vgs.render import require_video_writer
+
+    suffix = ".mp4"
+    try:
+        require_video_writer("x.mp4")
+    except ConfigError:
+        suffix = ".gif"
+    written = []
+    for task in plan_episodes(cfg, spec)[:max(0, count)]:
+        result = run_demo(cfg, task.seed, policy=spec.policy, peg=task.peg)
+        if rows is not None:
+            row = rows[rows["index"] == task.index]
+            was = float(row["assembly_time_s"].iloc[0]) if len(row) else math.nan
+            now = result.record.assembly_time
+            if not (was == now or (math.isnan(was) and math.isnan(now))):
+                print(f"vgs: episode {task.index} ended otherwise when run again for its video "
+                      f"({now:.3f} s, the table has {was:.3f} s)", file=sys.stderr)
+        path = out / "videos" / f"episode_{task.index:04d}{suffix}"
+        written.append(demo_video(result, replace(cfg.cell, peg=task.peg), path, **video))
+    return written

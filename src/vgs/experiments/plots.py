@@ -98,16 +98,23 @@ def demo_figure(result: DemoResult, path: str | Path) -> Path:
     ax.set(title="(a) colour heightmap (crop) and grasp", xlabel="x [mm]", ylabel="y [mm]",
            xlim=window[0], ylim=window[1])
     ax = fig.add_subplot(grid[0, 1])
-    im = ax.imshow(1000 * hm.depth, origin="lower", extent=ext, cmap="viridis")
+    if result.q_map is not None:  # a trained policy: its Q map on the peg pixels
+        ax.imshow(hm.color, origin="lower", extent=ext)
+        im = ax.imshow(np.ma.masked_where(hm.depth <= 0.005, result.q_map), origin="lower",
+                       extent=ext, cmap="inferno", alpha=0.85)
+        fig.colorbar(im, ax=ax, label="Q", shrink=0.8)
+        title = f"(b) Q map of {result.policy} (crop) and its grasp"
+    else:
+        im = ax.imshow(1000 * hm.depth, origin="lower", extent=ext, cmap="viridis")
+        fig.colorbar(im, ax=ax, label="height [mm]", shrink=0.8)
+        title = "(b) depth heightmap (crop) and grasp"
     _draw_grasp(ax, result)
-    fig.colorbar(im, ax=ax, label="height [mm]", shrink=0.8)
-    ax.set(title="(a) depth heightmap (crop) and grasp", xlabel="x [mm]",
-           xlim=window[0], ylim=window[1])
+    ax.set(title=title, xlabel="x [mm]", xlim=window[0], ylim=window[1])
     _tip_path(fig.add_subplot(grid[0, 2]), result)
     ax_f = fig.add_subplot(grid[1, :])
     _shade_phases(ax_f, time, phases, legend=True)
     lines = [ax_f.plot(time, wrench[:, k], lw=0.8, label=f"F{n}")[0] for k, n in enumerate("xyz")]
-    ax_f.set(ylabel="force at TCP [N]", title="(b) tared F/T signal (world frame) and phases")
+    ax_f.set(ylabel="force at TCP [N]", title="(d) tared F/T signal (world frame) and phases")
     shades = ax_f.get_legend_handles_labels()[0][:-3]
     ax_f.legend(lines, [ln.get_label() for ln in lines], fontsize=8, loc="upper left",
                 bbox_to_anchor=(1.0, 1.0))
@@ -115,14 +122,16 @@ def demo_figure(result: DemoResult, path: str | Path) -> Path:
     _shade_phases(ax_t, time, phases, legend=False)
     for k, name in enumerate("xyz"):
         ax_t.plot(time, wrench[:, 3 + k], lw=0.8, label=f"M{name}")
-    ax_t.set(xlabel="simulated time [s]", ylabel="torque at TCP [N m]")
+    ax_t.set(xlabel="simulated time [s]", ylabel="torque at TCP [N m]",
+             title="(e) tared torque (world frame) and phases")
     handles, labels = ax_t.get_legend_handles_labels()
     ax_t.legend(handles + shades, labels + [h.get_label() for h in shades], fontsize=8,
                 loc="upper left", bbox_to_anchor=(1.0, 1.0))
     rec = result.record
     status = "success" if rec.success else f"failed ({rec.failure_reason})"
-    fig.suptitle(f"vgs demo, seed {rec.seed}: {status}, assembly time {rec.assembly_time:.1f} s, "
-                 f"{rec.adjustments} adjustments, grasp offset {1000 * rec.grasp_offset:+.1f} mm")
+    fig.suptitle(f"vgs demo, {result.policy}, seed {rec.seed}: {status}, assembly time "
+                 f"{rec.assembly_time:.1f} s, {rec.adjustments} adjustments, grasp offset "
+                 f"{1000 * rec.grasp_offset:+.1f} mm")
     path = Path(path)
     fig.savefig(path, dpi=110)
     plt.close(fig)
