@@ -39,8 +39,8 @@ def test_train_then_heatmap(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("args", "field"),
     [
-        (["train", "--mode", "vgs", "--out", "x", "--set", "agent.gamma=2", "--profile",
-          "smoke"], "agent.gamma"),
+        (["train", "--mode", "vgs", "--out", "x", "--set", "agent.momentum=2", "--profile",
+          "smoke"], "agent.momentum"),
         (["train", "--mode", "vgs", "--out", "x", "--episodes", "0", "--profile", "smoke"],
          "train.episodes"),
         (["train", "--mode", "vgs", "--out", "x", "--backbone", "resnet", "--profile", "smoke"],

@@ -63,7 +63,7 @@ def test_override_returns_a_validated_copy(path: str, value: float) -> None:
         ("controller.joint_kp", (1.0, 2.0), "controller.joint_kp"),
         ("assembly.insertion_depth", 0.0, "assembly.insertion_depth"),
         ("network.backbone", "resnet", "network.backbone"),
-        ("agent.gamma", 1.5, "agent.gamma"),
+        ("agent.momentum", 1.5, "agent.momentum"),
         ("train.device", "tpu", "train.device"),
         ("eval.mass_range", 2.0, "eval.mass_range"),
     ],

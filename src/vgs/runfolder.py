@@ -83,7 +83,8 @@ def check_request(saved: dict[str, Any], cfg: Any, where: Path,
                   extendable: tuple[str, ...] = ()) -> list[str]:
     """Compare the configuration recorded in a run folder with the one requested.
 
-    Fields added to vgs since the folder was written take their defaults. A field in
+    Fields added to vgs since the folder was written take their defaults; fields it removed
+    (a class's ``RETIRED``, :func:`vgs.config.without_retired`) are ignored. A field in
     ``extendable`` (dotted paths such as ``train.episodes``) may grow: those that did are
     returned; any other difference, or one of them shrinking, is refused.
 
@@ -91,10 +92,11 @@ def check_request(saved: dict[str, Any], cfg: Any, where: Path,
         RunMismatchError: Naming the first field that differs.
         CorruptFileError: If the recorded configuration cannot be read by this vgs.
     """
-    from vgs.config import from_dict, to_dict
+    from vgs.config import from_dict, to_dict, without_retired
     from vgs.errors import VGSError
     from vgs.validate import config_differences
 
+    saved = without_retired(type(cfg), saved)  # fields vgs removed (changing no result)
     try:
         saved_cfg = from_dict(type(cfg), saved)
     except (TypeError, ValueError, VGSError) as exc:

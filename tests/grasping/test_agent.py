@@ -1,4 +1,4 @@
-"""Grasp agent: networks, loss locality, TD targets, target sync, actions, schedule, checkpoints."""
+"""Grasp agent: network, loss locality, TD targets, actions, schedule, checkpoints."""
 
 from __future__ import annotations
 
@@ -43,9 +43,8 @@ def _same(a: list[torch.Tensor], b: list[torch.Tensor]) -> bool:
     return all(torch.equal(x, y) for x, y in zip(a, b, strict=True))
 
 
-def test_networks_start_identical_and_seeded() -> None:
+def test_networks_start_seeded() -> None:
     a, b, c = _agent(0), _agent(0), _agent(1)
-    assert _same(_params(a.eva_net), _params(a.target_net))
     assert _same(_params(a.eva_net), _params(b.eva_net))
     assert not _same(_params(a.eva_net), _params(c.eva_net))
     group = a.optimizer.param_groups[0]
@@ -91,35 +90,16 @@ def test_update_gradient_only_at_executed_pixel() -> None:
     assert set(stats) == {"loss", "delta_q", "q_eva", "target"}
 
 
-def test_bootstrapped_target() -> None:
-    agent = _agent(gamma=0.5)
+def test_the_target_is_the_reward_of_a_terminal_transition() -> None:
+    agent = _agent()
     color, depth = _maps(1)
     n_color, n_depth = _maps(2)
-    q_next = agent.q_values(n_color, n_depth, target=True)
-    boot = Transition(color, depth, (0, 3, 3), 0.3, n_color, n_depth, done=False)
-    assert agent.target_value(boot) == pytest.approx(0.3 + 0.5 * float(q_next.max()), rel=1e-6)
-    terminal = Transition(color, depth, (0, 3, 3), 0.3, n_color, n_depth, done=True)
-    assert agent.target_value(terminal) == pytest.approx(0.3)
-    assert agent.target_value(Transition(color, depth, (0, 3, 3), 0.3)) == pytest.approx(0.3)
-    assert agent.update(boot)["target"] == pytest.approx(agent.target_value(boot), rel=1e-6)
-
-
-def test_target_sync_period() -> None:
-    agent = _agent(learning_rate=0.01, target_update_period=3)
-    initial = _params(agent.target_net)
-    color, depth = _maps(3)
-    t = Transition(color, depth, (2, 10, 10), 1.0)
-    for _ in range(2):
-        agent.update(t)
-        assert _same(_params(agent.target_net), initial)
-        assert not _same(_params(agent.eva_net), initial)
-    agent.update(t)
-    assert agent.updates == 3
-    assert _same(_params(agent.target_net), _params(agent.eva_net))
-    synced = _params(agent.target_net)
-    agent.update(t)
-    assert _same(_params(agent.target_net), synced)
-    assert not agent.target_net.training
+    assert agent.target_value(Transition(color, depth, (0, 3, 3), 0.3)) == 0.3
+    stored_next = Transition(color, depth, (0, 3, 3), 0.3, n_color, n_depth, done=True)
+    assert agent.update(stored_next)["target"] == 0.3
+    with pytest.raises(ConfigError, match="transition.done"):
+        agent.update(Transition(color, depth, (0, 3, 3), 0.3, n_color, n_depth, done=False))
+    assert agent.updates == 1
 
 
 def test_act_greedy_and_exploratory() -> None:
@@ -202,8 +182,6 @@ def test_state_dict_round_trip() -> None:
     other.load_state_dict(torch.load(buffer, weights_only=True))
     assert other.updates == 3
     np.testing.assert_array_equal(agent.q_values(color, depth), other.q_values(color, depth))
-    np.testing.assert_array_equal(agent.q_values(color, depth, target=True),
-                                  other.q_values(color, depth, target=True))
     # identical next step, momentum buffers included
     t = Transition(color, depth, (1, 5, 6), 0.0)
     assert agent.update(t) == other.update(t)
@@ -211,6 +189,18 @@ def test_state_dict_round_trip() -> None:
         action="rotation", backbone="light", num_rotations=8), AgentConfig())
     with pytest.raises(ConfigError):
         wrong.load_state_dict(agent.state_dict())
+
+
+def test_a_state_written_with_a_target_network_loads() -> None:
+    """States saved before the target network was removed carry a ``target_net`` entry."""
+    agent = _agent(learning_rate=0.01)
+    color, depth = _maps(6)
+    agent.update(Transition(color, depth, (1, 4, 4), 1.0))
+    old = {**agent.state_dict(), "target_net": _agent(seed=3).eva_net.state_dict()}
+    other = _agent(seed=7, learning_rate=0.01)
+    other.load_state_dict(old)
+    assert other.updates == 1
+    np.testing.assert_array_equal(agent.q_values(color, depth), other.q_values(color, depth))
 
 
 def test_delta_q_monitor() -> None:

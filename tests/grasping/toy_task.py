@@ -92,8 +92,7 @@ def train_toy(
     agent = GraspAgent(
         NetworkConfig(action=action, backbone="light", num_rotations=ROTATIONS,
                       rotate=rotate, precision=precision),
-        AgentConfig(learning_rate=learning_rate or 1e-4, target_update_period=10,
-                    replay_batch=1),
+        AgentConfig(learning_rate=learning_rate or 1e-4, replay_batch=1),
         seed=seed,
     )
     if learning_rate == 0:

@@ -12,8 +12,8 @@ The package's modules follow what they configure: :mod:`vgs.config.cell` (peg, h
 force-torque sensor, camera, simulation), :mod:`vgs.config.control` (controller, assembly),
 :mod:`vgs.config.learning` (network, agent, reward, training), :mod:`vgs.config.experiment`
 (evaluation, reproduction, :class:`ExperimentConfig`, the profiles) and :mod:`vgs.config.tree`
-(``override``, ``to_dict``, ``from_dict``, ``same_config``). Import the names from
-:mod:`vgs.config` itself.
+(``override``, ``to_dict``, ``from_dict``, ``same_config``, ``without_retired``). Import the
+names from :mod:`vgs.config` itself.
 """
 
 from vgs.config.cell import (
@@ -44,12 +44,19 @@ from vgs.config.learning import (
     RewardConfig,
     TrainConfig,
 )
-from vgs.config.tree import NO_SUCH_FIELD, from_dict, override, same_config, to_dict
+from vgs.config.tree import (
+    NO_SUCH_FIELD,
+    from_dict,
+    override,
+    same_config,
+    to_dict,
+    without_retired,
+)
 
 __all__ = [
     "ACTIONS", "BACKBONES", "CONDITIONS", "NO_SUCH_FIELD", "PRECISIONS", "PROFILES", "ROTATE_MODES",
     "AgentConfig", "AssemblyConfig", "CameraConfig", "CellConfig", "ControllerConfig",
     "EvalConfig", "ExperimentConfig", "FTSensorConfig", "GripperConfig", "HoleConfig",
     "NetworkConfig", "PegConfig", "ReproduceConfig", "RewardConfig", "SimConfig", "TrainConfig",
-    "from_dict", "override", "profile", "same_config", "to_dict",
+    "from_dict", "override", "profile", "same_config", "to_dict", "without_retired",
 ]

@@ -110,7 +110,7 @@ def _quick() -> ExperimentConfig:
     return ExperimentConfig(
         name="quick",
         network=NetworkConfig(backbone="light", num_rotations=8),
-        agent=AgentConfig(random_episodes=30, target_update_period=10, delta_q_window=20),
+        agent=AgentConfig(random_episodes=30, delta_q_window=20),
         train=TrainConfig(episodes=80, checkpoint_every=10),
         eval=EvalConfig(episodes=12),
         reproduce=ReproduceConfig(sweep_offsets=5, sweep_trials=3),
@@ -126,7 +126,7 @@ def _medium() -> ExperimentConfig:
     return ExperimentConfig(
         name="medium",
         network=NetworkConfig(backbone="light", num_rotations=8),
-        agent=AgentConfig(random_episodes=240, target_update_period=25, delta_q_window=50),
+        agent=AgentConfig(random_episodes=240, delta_q_window=50),
         train=TrainConfig(episodes=1200, checkpoint_every=25),
         eval=EvalConfig(episodes=250),
         reproduce=ReproduceConfig(sweep_offsets=0),
@@ -157,8 +157,7 @@ def _smoke() -> ExperimentConfig:
     return ExperimentConfig(
         name="smoke",
         network=NetworkConfig(backbone="light", num_rotations=4),
-        agent=AgentConfig(random_episodes=2, target_update_period=2, delta_q_window=2,
-                          replay_capacity=64),
+        agent=AgentConfig(random_episodes=2, delta_q_window=2, replay_capacity=64),
         train=TrainConfig(episodes=4, checkpoint_every=2),
         eval=EvalConfig(episodes=4),
         reproduce=ReproduceConfig(sweep_offsets=3, sweep_trials=1),

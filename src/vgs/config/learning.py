@@ -82,19 +82,16 @@ class NetworkConfig:
 
 @dataclass(frozen=True)
 class AgentConfig:
-    """DQN agent (paper eq. 4-11).
+    """DQN agent (paper eq. 4-11) for terminal one-step episodes: the target is y = R, so the
+    paper's discount gamma and target network have no setting (:mod:`vgs.grasping.agent`).
 
     Attributes:
         learning_rate: SGD learning rate (paper: 1e-4).
         momentum: SGD momentum (paper: 0.9).
         weight_decay: L2 weight decay.
-        gamma: Future discount (paper: 0.5); unused by vgs train, whose grasps are terminal
-            one-step episodes (target y = R).
         epsilon_start: Initial exploration rate (paper: 0.5).
         epsilon_end: Final exploration rate (paper: 0.1).
         random_episodes: Grasps chosen at random before the greedy phase (paper: 1000).
-        target_update_period: Updates between copies of the evaluation into the target network
-            (which vgs train never reads: its target is y = R).
         replay_capacity: Stored transitions.
         replay_batch: Extra prioritised replays per episode.
         delta_q_threshold: Convergence threshold on Delta Q = |y - Q_eva| (eq. 10; |R - Q_eva|
@@ -105,23 +102,25 @@ class AgentConfig:
     learning_rate: float = 1e-4
     momentum: float = 0.9
     weight_decay: float = 2e-5
-    gamma: float = 0.5
     epsilon_start: float = 0.5
     epsilon_end: float = 0.1
     random_episodes: int = 1000
-    target_update_period: int = 50
     replay_capacity: int = 5000
     replay_batch: int = 1
     delta_q_threshold: float = 0.02
     delta_q_window: int = 100
 
+    # Removed 2026-12-05 (issue 40): with terminal one-step episodes they changed no result.
+    # Recorded configurations that still hold them read as without them.
+    RETIRED: ClassVar[tuple[str, ...]] = ("gamma", "target_update_period")
+
     def __post_init__(self) -> None:
         _positive(self, "learning_rate", "delta_q_threshold", prefix="agent.")
-        _fraction(self, "momentum", "gamma", "epsilon_start", "epsilon_end", prefix="agent.")
+        _fraction(self, "momentum", "epsilon_start", "epsilon_end", prefix="agent.")
         for name in ("random_episodes", "replay_batch"):
             if getattr(self, name) < 0:
                 raise ConfigError(f"agent.{name}", "must be >= 0")
-        for name in ("target_update_period", "replay_capacity", "delta_q_window"):
+        for name in ("replay_capacity", "delta_q_window"):
             if getattr(self, name) < 1:
                 raise ConfigError(f"agent.{name}", "must be >= 1")
 

@@ -66,6 +66,27 @@ def from_dict(cls: type, data: dict[str, Any]) -> Any:
     return cls(**kwargs)
 
 
+def without_retired(cls: type, data: dict[str, Any]) -> dict[str, Any]:
+    """``data`` (:func:`to_dict` output of a ``cls``) without the fields vgs has removed.
+
+    A class names them in its ``RETIRED`` tuple: settings that could change no result and were
+    taken out (CHANGELOG.md). A configuration recorded while they existed reads as one without
+    them, so its run folder stays resumable.
+    """
+    retired: tuple[str, ...] = getattr(cls, "RETIRED", ())
+    out = {}
+    for key, value in data.items():
+        if key in retired:
+            continue
+        ftype = next((f.type for f in fields(cls) if f.name == key), None)
+        namespace = vars(sys.modules[cls.__module__])
+        ftype = ftype if isinstance(ftype, type) else namespace.get(str(ftype), None)
+        if isinstance(ftype, type) and is_dataclass(ftype) and isinstance(value, dict):
+            value = without_retired(ftype, value)
+        out[key] = value
+    return out
+
+
 def same_config(saved: Any, cfg: Any) -> bool:
     """Whether ``saved`` (:func:`to_dict` output, e.g. read from a run's JSON) describes ``cfg``.
 

@@ -226,7 +226,6 @@ def _load_policy_files(folder: Path, meta: dict[str, Any], agent: Any, device: s
     except RuntimeError as exc:
         raise CorruptFileError(weights_path, f"does not fit the network of run.json ({exc})") \
             from None
-    agent.sync_target()
     return episodes
 
 

@@ -142,11 +142,8 @@ def save_checkpoint(path: Path, agent: GraspAgent, replay: ReplayBuffer, state: 
     replay_state = replay.state_dict()
     arrays = {k: None if v is None else torch.from_numpy(np.ascontiguousarray(v))
               for k, v in replay_state.pop("arrays").items()}
-    eva, target = agent_state.pop("eva_net"), agent_state.pop("target_net")
-    tensors = {"eva_net": eva, "optimizer": agent_state.pop("optimizer"),
+    tensors = {"eva_net": agent_state.pop("eva_net"), "optimizer": agent_state.pop("optimizer"),
                "replay_arrays": arrays, "torch_rng": torch.get_rng_state()}
-    if not all(torch.equal(eva[k], target[k]) for k in eva):  # one architecture: same keys
-        tensors["target_net"] = target
     meta = {"episode": state.episode, "threshold": state.threshold,
             "exploration_times": state.exploration_times, "rng_state": state.rng_state,
             "monitor": monitor.state_dict(), "agent": agent_state, "replay": replay_state,
@@ -205,8 +202,8 @@ def load_checkpoint(path: Path, agent: GraspAgent, replay: ReplayBuffer | None =
     """
     tensors, meta = checkpoint.load(path, map_location=device)
     try:
+        # A checkpoint written before the target network was removed may hold one: not read.
         agent.load_state_dict({**meta["agent"], "eva_net": tensors["eva_net"],
-                               "target_net": tensors.get("target_net", tensors["eva_net"]),
                                "optimizer": tensors["optimizer"]})
         if replay is not None:
             arrays = {k: None if v is None else v.cpu().numpy()

@@ -1,20 +1,17 @@
-"""DQN grasp agent with an evaluation and a target network (paper 3.1, eq. 4-11).
+"""DQN grasp agent (paper 3.1, eq. 4-11) for terminal one-step episodes.
 
-**Networks.** The evaluation network Q_eva (parameters theta) is trained; the target network
-Q_tar (parameters theta') has the same architecture and the same initial parameters, only runs
-forward passes, and copies the evaluation network, theta' <- theta (BatchNorm statistics
-included), after every ``target_update_period``-th update.
+**Network.** The evaluation network Q_eva (parameters theta) is trained and acts.
 
-**TD target.** For a transition (s, a, r, s', done)
+**TD target.** The paper's target is y = r + gamma max_{a'} Q_tar(s', a') (eq. 8, gamma = 0.5,
+with a target network Q_tar). In vgs each grasp-and-assembly is one episode and the next
+observation is a fresh, independently placed peg, so the action cannot influence s': every
+transition is terminal and the target is
 
-    y = r + gamma * max_{a'} Q_tar(s', a')   if a next state s' is given and done is False,
-    y = r                                     otherwise,
+    y = r
 
-where the max runs over all R rotations and all pixels of s' (as VPG). The paper uses
-gamma = 0.5 (eq. 8). In this project each grasp-and-assembly is one episode and the next
-observation is a fresh, independently placed peg, so the action cannot influence s'; the
-training loop may then store ``done=True`` (y = r, a contextual-bandit target) or store the next
-heightmap with ``done=False`` to follow eq. 8 literally. Both are supported per transition.
+(a contextual-bandit target). gamma and a target network could change no result, so the agent
+has neither (``agent.gamma`` and ``agent.target_update_period`` were removed, CHANGELOG.md); a
+transition that is not terminal (``done=False``) is refused.
 
 **Loss.** With a = (k, i, j) the executed rotation and pixel, the Huber loss (eq. 11, smooth L1
 with beta = 1)
@@ -51,7 +48,6 @@ the maps and pixels, restricted to valid pixels.
 from __future__ import annotations
 
 import contextlib
-import copy
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -108,14 +104,14 @@ class GraspAction:
 
 
 class GraspAgent:
-    """Evaluation and target grasp Q networks, SGD, Huber TD updates and epsilon-greedy actions.
+    """The evaluation grasp Q network, SGD, Huber TD updates and epsilon-greedy actions.
 
     Heightmaps are passed raw, as the simulator gives them: ``color`` uint8 (H, W, 3) and
     ``depth`` float32 (H, W) [m]; the agent normalises them (:mod:`vgs.grasping.preprocess`).
 
     Args:
         network_cfg: Network configuration (backbone, R, weights, depth normalisation).
-        agent_cfg: Learning rate, momentum, weight decay, gamma, exploration, target period.
+        agent_cfg: Learning rate, momentum, weight decay, exploration, replay.
         device: Torch device string (``"cpu"`` or ``"cuda"``).
         seed: Seed of the network initialisation (the global torch RNG is left untouched).
         rotate: Rotation mode of :class:`GraspQNetwork` (``"input"`` or ``"features"``);
@@ -125,7 +121,6 @@ class GraspAgent:
 
     Attributes:
         eva_net: Evaluation network Q_eva.
-        target_net: Target network Q_tar.
         optimizer: SGD on the evaluation network.
         updates: Number of gradient updates so far.
     """
@@ -147,9 +142,6 @@ class GraspAgent:
             torch.manual_seed(seed)
             net = GraspQNetwork(network_cfg, rotate=self.rotate, channels_last=channels_last)
         self.eva_net = net.to(self.device)
-        self.target_net = copy.deepcopy(self.eva_net).eval()
-        for p in self.target_net.parameters():
-            p.requires_grad_(False)
         self.optimizer = torch.optim.SGD(
             self.eva_net.parameters(),
             lr=agent_cfg.learning_rate,
@@ -182,10 +174,9 @@ class GraspAgent:
             return torch.autocast(device_type=self.device.type, dtype=torch.bfloat16)
         return contextlib.nullcontext()
 
-    def q_values(self, color: np.ndarray, depth: np.ndarray, target: bool = False) -> np.ndarray:
-        """Q map (R, H, W), float32, of the evaluation (or target) network in eval mode, no
-        gradients."""
-        net = self.target_net if target else self.eva_net
+    def q_values(self, color: np.ndarray, depth: np.ndarray) -> np.ndarray:
+        """Q map (R, H, W), float32, of the evaluation network in eval mode, no gradients."""
+        net = self.eva_net
         c, d = self._inputs(color, depth)
         was_training = net.training
         net.eval()
@@ -260,10 +251,14 @@ class GraspAgent:
         )
 
     def target_value(self, transition: Transition) -> float:
-        """TD target y: r + gamma max Q_tar(s', .) with a next state and not done, else r."""
-        if transition.has_next and not transition.done:
-            q_next = self.q_values(transition.next_color, transition.next_depth, target=True)
-            return float(transition.reward + self.agent_cfg.gamma * float(q_next.max()))
+        """TD target of a terminal one-step transition: y = r (module docstring).
+
+        Raises:
+            ConfigError: If the transition is not terminal (``done=False``).
+        """
+        if not transition.done:
+            raise ConfigError("transition.done", "the agent learns terminal one-step episodes "
+                                                 "(target y = r); got done=False")
         return float(transition.reward)
 
     def update(self, transition: Transition) -> dict[str, float]:
@@ -274,7 +269,8 @@ class GraspAgent:
             ``q_eva`` = Q_eva(s, a) (train-mode forward before the step) and ``target`` = y.
 
         Raises:
-            ConfigError: If the action's rotation is outside [0, R) or its pixel outside the map.
+            ConfigError: If the action's rotation is outside [0, R) or its pixel outside the map,
+                or the transition is not terminal.
         """
         k, row, col = (int(v) for v in transition.action)
         rotation_angle(k, self.num_rotations)
@@ -295,8 +291,6 @@ class GraspAgent:
         loss.backward()
         self.optimizer.step()
         self.updates += 1
-        if self.updates % self.agent_cfg.target_update_period == 0:
-            self.sync_target()
         return {"loss": float(loss.detach()), "delta_q": abs(y - q_eva), "q_eva": q_eva,
                 "target": y}
 
@@ -309,7 +303,7 @@ class GraspAgent:
         """``agent.replay_batch`` prioritised replays, each followed by a surprise update.
 
         Each replay draws a transition by surprise rank (:class:`ReplayBuffer`), recomputes its
-        TD target with the current target network, takes one :meth:`update` step and stores
+        TD target, takes one :meth:`update` step and stores
         the new Delta Q as its surprise.
 
         Args:
@@ -333,16 +327,10 @@ class GraspAgent:
             results.append({**stats, "index": float(index)})
         return results
 
-    def sync_target(self) -> None:
-        """theta' <- theta: copy the evaluation network (parameters and BN buffers)."""
-        self.target_net.load_state_dict(self.eva_net.state_dict())
-        self.target_net.eval()
-
     def state_dict(self) -> dict[str, Any]:
-        """Both networks, the optimiser, the update counter and the configuration."""
+        """The network, the optimiser, the update counter and the configuration."""
         return {
             "eva_net": self.eva_net.state_dict(),
-            "target_net": self.target_net.state_dict(),
             "optimizer": self.optimizer.state_dict(),
             "updates": self.updates,
             "network_cfg": to_dict(self.network_cfg),
@@ -350,12 +338,13 @@ class GraspAgent:
         }
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
-        """Restore a :meth:`state_dict`.
+        """Restore a :meth:`state_dict`. A ``target_net`` entry (written before the target
+        network was removed) is ignored.
 
         Raises:
             ConfigError: ``agent.checkpoint`` on missing entries or a different architecture.
         """
-        missing = {"eva_net", "target_net", "optimizer", "updates"} - set(state)
+        missing = {"eva_net", "optimizer", "updates"} - set(state)
         if missing:
             raise ConfigError("agent.checkpoint", f"missing entries {sorted(missing)}")
         if state.get("rotate", self.rotate) != self.rotate:
@@ -373,12 +362,10 @@ class GraspAgent:
             )
         try:
             self.eva_net.load_state_dict(state["eva_net"])
-            self.target_net.load_state_dict(state["target_net"])
         except RuntimeError as exc:
             raise ConfigError("agent.checkpoint", str(exc)) from exc
         self.optimizer.load_state_dict(state["optimizer"])
         self.updates = int(state["updates"])
-        self.target_net.eval()
 
 
 __all__ = [
