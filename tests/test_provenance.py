@@ -62,3 +62,17 @@ def test_installed_copy_records_its_versions(tmp_path: Path) -> None:
     schema = pq.read_schema(tmp_path / "ev" / "episodes.parquet").metadata
     assert {k.decode(): v.decode() for k, v in schema.items() if not k.startswith(b"pandas")} \
         == made
+
+
+@pytest.mark.slow
+def test_tensorboard_logs_the_configuration(tmp_path: Path) -> None:
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    proc = subprocess.run([sys.executable, "-m", "vgs.cli", "train", "--mode", "vgs",
+                           "--episodes", "1", "--out", "run", *SMALL], capture_output=True,
+                          text=True, timeout=600, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    acc = EventAccumulator(str(tmp_path / "run" / "tensorboard"), size_guidance={"tensors": 0})
+    acc.Reload()
+    text = acc.Tensors("config/text_summary")[0].tensor_proto.string_val[0].decode()
+    assert '"mode": "vgs"' in text and '"vgs_version"' in text and '"learning_rate"' in text

@@ -55,8 +55,8 @@ COLUMNS: dict[str, Column] = {
     "policy": Column("", "str", "policy label: baseline, vgs, center, random or a user policy"),
     "condition": Column("", "str", "test condition: nominal, mass or length"),
     "root_seed": Column("", "int", "root seed of the evaluation"),
-    "train_run": Column("", "str", "training run the policy comes from, <mode>_s<seed> (tables "
-                                   "merged over training seeds)"),
+    "train_run": Column("", "str", "training seed the policy comes from, s<seed> (its run is "
+                                   "train/<mode>_s<seed>; tables merged over training seeds)"),
     "episode": Column("", "int", "training episode number, from 0"),
     "mode": Column("", "str", "training mode: vgs or baseline"),
     "trial": Column("", "int", "sweep scene number: the same scene at every offset"),
@@ -277,6 +277,41 @@ def field_metadata(name: str) -> dict[str, str]:
     except KeyError:
         return {}
     return {"unit": col.unit, "description": col.description}
+
+
+# Decimals a table keeps per unit: the simulator resolves time to its 2 ms step (a control
+# tick is 10 ms), so times are written to the ms (not 43.16000000001258); hours to 0.4 ms.
+DECIMALS = {"s": 3, "h": 7}
+
+
+def _decimals(name: str) -> int | None:
+    found = COLUMNS.get(name) or SUMMARY_COLUMNS.get(name)
+    return DECIMALS.get(found.unit) if found is not None and found.kind == "float" else None
+
+
+def rounded(df: Any) -> Any:
+    """A copy of a table (pandas DataFrame) with its time columns rounded to :data:`DECIMALS`,
+    for writing: records and journals keep full precision, so resuming compares them as
+    computed."""
+    df = df.copy()
+    for name in df.columns:
+        places = _decimals(str(name))
+        if places is not None and df[name].dtype.kind == "f":
+            df[name] = df[name].round(places)
+    return df
+
+
+def rounded_rows(rows: Any) -> list[dict[str, Any]]:
+    """:func:`rounded` for rows (dicts), for ``csv.DictWriter``."""
+    out = []
+    for row in rows:
+        row = dict(row)
+        for name, value in row.items():
+            places = _decimals(name)
+            if places is not None and isinstance(value, float) and math.isfinite(value):
+                row[name] = round(value, places)
+        out.append(row)
+    return out
 
 
 def write_parquet(df: Any, path: Path, metadata: dict[str, str] | None = None) -> None:

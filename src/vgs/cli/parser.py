@@ -158,6 +158,11 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--backbone", help="densenet121 or light (default: the profile's)")
     train.add_argument("--seed", type=seed_arg, help="root seed (default: the profile's)")
     train.add_argument("--device", help="cpu, cuda or auto (default: the profile's)")
+    train.add_argument("--workers", type=int, metavar="K",
+                       help="episodes whose physics runs side by side in K processes: sets "
+                            "train.parallel_episodes (the grasps of K consecutive episodes "
+                            "chosen by the same network; default: the profile's, 1 = the "
+                            "paper's order)")
     _backend_flags(train, "where the physics of parallel episodes (train.parallel_episodes > 1) "
                           "runs: ")
     train.add_argument("--no-progress", action="store_true", help="no progress bar")

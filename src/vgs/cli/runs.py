@@ -131,7 +131,8 @@ def cmd_train(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
 
     cfg = flag_overrides(cfg, args, {"episodes": "train.episodes",
                                      "backbone": "network.backbone", "seed": "seed",
-                                     "device": "train.device"})
+                                     "device": "train.device",
+                                     "workers": "train.parallel_episodes"})
     out = train(cfg, args.mode, Path(args.out), progress=not args.no_progress,
                 backend=args.backend, ray_address=args.ray_address)
     if (out / "checkpoint.pt").exists():

@@ -18,6 +18,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from vgs.errors import ConfigError  # noqa: E402
+from vgs.experiments.palette import LINESTYLES, policy_color  # noqa: E402
 
 
 def load_episodes(run_dir: Path) -> tuple[pd.DataFrame, dict]:
@@ -66,22 +67,30 @@ def plot_curves(run_dirs: list[Path], out: Path, window: int = 20) -> dict[str, 
     (ax_g, ax_t), (ax_r, ax_o) = axes
     summaries: dict[str, dict] = {}
     offsets = []
+    seen: dict[str, int] = {}
     for run in run_dirs:
         df, meta = load_episodes(run)
         mode = meta["mode"]
+        # one colour per policy (vgs.experiments.palette); its runs told apart by line style
+        style = {"color": policy_color(mode),
+                 "ls": LINESTYLES[seen.setdefault(mode, 0) % len(LINESTYLES)]}
+        seen[mode] += 1
         random_episodes = int(meta["config"]["agent"]["random_episodes"])
         label = f"{mode} ({run.name})"
         summaries[label] = summarize(df, random_episodes, window)
         roll = df.rolling(window, min_periods=max(1, window // 2))
-        ax_g.plot(df.episode, roll.grasp_success.mean(), label=label)
+        ax_g.plot(df.episode, roll.grasp_success.mean(), label=label, **style)
         times = df.assembly_time_s.where(df.assembly_success)
-        ax_t.plot(df.episode, times.rolling(window, min_periods=min(3, window)).mean(), label=label)
-        ax_r.plot(df.episode, roll.reward.mean(), label=label)
+        ax_t.plot(df.episode, times.rolling(window, min_periods=min(3, window)).mean(),
+                  label=label, **style)
+        ax_r.plot(df.episode, roll.reward.mean(), label=label, **style)
         held = df[df.grasp_success]
         offsets.append((label + ", random phase",
-                        held[held.episode < random_episodes].grasp_offset_mm.abs()))
+                        held[held.episode < random_episodes].grasp_offset_mm.abs(),
+                        {**style, "alpha": 0.45}))
         offsets.append((label + f", last {window}",
-                        held[held.episode >= df.episode.max() + 1 - window].grasp_offset_mm.abs()))
+                        held[held.episode >= df.episode.max() + 1 - window].grasp_offset_mm.abs(),
+                        style))
         for ax in (ax_g, ax_t, ax_r):
             ax.axvline(random_episodes, color="grey", ls=":", lw=1)
     ax_g.set_ylabel(f"grasp success (moving mean, {window})")
@@ -91,10 +100,10 @@ def plot_curves(run_dirs: list[Path], out: Path, window: int = 20) -> dict[str, 
         ax.set_xlabel("episode (dotted: end of random exploration)")
         ax.legend(fontsize=8)
     bins = np.linspace(0, 50, 11)
-    for label, values in offsets:
+    for label, values, style in offsets:
         if len(values):
             ax_o.hist(values, bins=bins, histtype="step", lw=1.5, density=True,
-                      label=f"{label} (n={len(values)})")
+                      label=f"{label} (n={len(values)})", **style)
     ax_o.set_xlabel("|grasp offset from the centre of mass| [mm] (ground truth)")
     ax_o.set_ylabel("density")
     ax_o.legend(fontsize=7)

@@ -54,7 +54,7 @@ import pandas as pd
 from tqdm import tqdm
 
 from vgs.assembly.record import EpisodeRecord
-from vgs.columns import write_parquet
+from vgs.columns import rounded, write_parquet
 from vgs.config import CONDITIONS, ExperimentConfig, PegConfig, to_dict
 from vgs.errors import ConfigError, CorruptFileError, RunMismatchError
 from vgs.experiments.episodepool import BACKENDS, EpisodeTask, run_local, run_ray, task_row
@@ -217,7 +217,9 @@ def table_order(columns: list[str]) -> list[str]:
 
 def write_tables(df: pd.DataFrame, out: Path) -> None:
     """``out/episodes.parquet`` (units and descriptions in the fields' metadata) and
-    ``out/episodes.csv``, each written whole and renamed into place."""
+    ``out/episodes.csv``, each written whole and renamed into place, times to the ms
+    (:func:`vgs.columns.rounded`)."""
+    df = rounded(df)
     for name, write in (("episodes.parquet", lambda p: write_parquet(df, p, provenance())),
                         ("episodes.csv", lambda p: df.to_csv(p, index=False))):
         tmp = out / f".{name}.tmp"

@@ -21,6 +21,7 @@ from vgs.assembly.record import PHASES  # noqa: E402
 from vgs.config import ExperimentConfig  # noqa: E402
 from vgs.control.arm import GRAVITY  # noqa: E402
 from vgs.experiments.demo import DemoResult  # noqa: E402
+from vgs.experiments.palette import policy_color  # noqa: E402
 from vgs.experiments.stats import population_std  # noqa: E402
 from vgs.sim.camera import Heightmap  # noqa: E402
 from vgs.sim.rg2 import PAD_HALF  # noqa: E402
@@ -206,9 +207,9 @@ def sweep_figure(rows: Sequence[dict[str, Any]], summary: Sequence[dict[str, Any
     spacing = np.min(np.diff(offsets)) if offsets.size > 1 else 10.0
     jitter = rng.uniform(-0.12, 0.12, len(ok)) * spacing
     x_ok = np.array([r["offset_mm"] for r in ok]) + jitter
-    ax.scatter(x_ok, [r["assembly_time_s"] for r in ok], s=8, color="C0", alpha=0.25,
-               lw=0, label="successful trials")
-    _mean_std(ax, summary, "time", "C0", "mean +- std")
+    ax.scatter(x_ok, [r["assembly_time_s"] for r in ok], s=8, color=policy_color("center"),
+               alpha=0.25, lw=0, label="successful trials")
+    _mean_std(ax, summary, "time", policy_color("center"), "mean +- std")
     ax.set(ylabel="assembly time [s] (simulated)")
     ax.set_title(title or "Assembly time against grasp offset")
     _moment_axis(ax, cfg, offsets)

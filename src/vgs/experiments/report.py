@@ -32,6 +32,7 @@ matplotlib.use("Agg")
 import pandas as pd  # noqa: E402
 
 from vgs.checkpoint import atomic_write_text  # noqa: E402
+from vgs.columns import rounded  # noqa: E402
 from vgs.config import CONDITIONS  # noqa: E402
 from vgs.errors import ConfigError  # noqa: E402
 from vgs.experiments.evaluate import summarize  # noqa: E402
@@ -228,8 +229,10 @@ def _training_rows(out: Path) -> list[list[str]]:
     return rows
 
 
-def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
-    """Write ``report.md``, ``report.html``, ``results.csv`` and figures into ``out``.
+def build_report(out: Path, title: str | None = None) -> Path:
+    """Write ``report.md``, ``report.html``, ``results.csv`` and figures into ``out``; the
+    title defaults to the one ``vgs reproduce`` gives (the profile from ``reproduce.json``),
+    so a re-run of ``vgs report`` keeps it.
 
     Raises:
         ConfigError: If ``out`` holds no evaluation results.
@@ -238,9 +241,12 @@ def build_report(out: Path, title: str = "VGS reproduction report") -> Path:
     figures = out / "figures"
     figures.mkdir(parents=True, exist_ok=True)
     table = results_table(df)
-    table.to_csv(out / "results.csv", index=False)
+    rounded(table).to_csv(out / "results.csv", index=False)  # times to the ms
     meta = read_json(out / "reproduce.json") if (out / "reproduce.json").exists() else {}
 
+    if title is None:
+        title = "VGS reproduction report" + (f" ({meta['profile']} profile)"
+                                             if meta.get("profile") else "")
     doc = Doc(out)
     doc.h(1, title)
     if meta:

@@ -13,6 +13,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from vgs.config import CONDITIONS  # noqa: E402
+from vgs.experiments.palette import policy_color  # noqa: E402
 
 LEARNED = ("baseline", "vgs")
 
@@ -29,11 +30,8 @@ def policy_order(policies: list[str]) -> list[str]:
     return [p for p in LEARNED if p in policies] + sorted(p for p in policies if p not in LEARNED)
 
 
-COLORS = {"baseline": "tab:blue", "vgs": "tab:red", "center": "tab:gray", "random": "tab:green"}
-
-
 def _color(policy: str) -> str:
-    return COLORS.get(policy, "tab:purple")
+    return policy_color(policy)
 
 
 def plot_times(df: pd.DataFrame, condition: str, path: Path) -> Path:

@@ -219,7 +219,7 @@ class Reproduction:
         t0 = time.perf_counter()
         self.meta["finished"] = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
         self._save()
-        path = build_report(self.out, title=f"VGS reproduction report ({self.cfg.name} profile)")
+        path = build_report(self.out)  # titled with the profile of reproduce.json
         self._stage("report", t0)
         return path
 

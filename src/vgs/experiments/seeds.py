@@ -43,9 +43,11 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from vgs.columns import rounded  # noqa: E402
 from vgs.config import CONDITIONS  # noqa: E402
 from vgs.errors import ConfigError  # noqa: E402
 from vgs.experiments.evaluate import summarize  # noqa: E402
+from vgs.experiments.palette import GAIN_COLORS  # noqa: E402
 from vgs.experiments.report import PAPER, load_results  # noqa: E402
 from vgs.experiments.reportfigures import CONDITION_TITLES, LEARNED  # noqa: E402
 from vgs.experiments.stats import (  # noqa: E402
@@ -237,8 +239,8 @@ def plot_seeds(table: pd.DataFrame, path: Path) -> Path:
         for _, row in part.iterrows():
             mean = row["train_run"] == "mean"
             # Upper mark: the mean of the successes; lower: the total time of all tests.
-            for key, color, dy in ((MEAN_GAIN.name, "black" if mean else "tab:red", 0.12),
-                                   (TOTAL_GAIN.name, "tab:green", -0.12)):
+            for key, color, dy in ((MEAN_GAIN.name, "black" if mean else GAIN_COLORS["gain"],
+                                    0.12), (TOTAL_GAIN.name, GAIN_COLORS["total_gain"], -0.12)):
                 yi = y_of[row["train_run"]] + dy
                 if math.isfinite(row[f"{key}_ci_low"]):
                     ax.plot([row[f"{key}_ci_low"], row[f"{key}_ci_high"]], [yi, yi],
@@ -249,14 +251,14 @@ def plot_seeds(table: pd.DataFrame, path: Path) -> Path:
         ax.axvline(0.0, color="gray", lw=0.8)
         paper = PAPER.get(condition, {}).get("gain")
         if paper is not None:
-            ax.axvline(paper, color="tab:blue", ls="--", lw=1.2)
-            ax.text(paper, len(runs) - 0.45, f" paper {paper:+.2f} %", color="tab:blue",
+            ax.axvline(paper, color=GAIN_COLORS["paper"], ls="--", lw=1.2)
+            ax.text(paper, len(runs) - 0.45, f" paper {paper:+.2f} %", color=GAIN_COLORS["paper"],
                     fontsize=8, va="center")
         ax.set_ylim(-0.6, len(runs) - 0.2)
         ax.set_title(CONDITION_TITLES.get(condition, condition), fontsize=9)
         ax.set_xlabel("efficiency gain of VGS [%] (95 % CI)")
-    axes[0][0].plot([], [], "o", color="tab:red", label="mean time of successes")
-    axes[0][0].plot([], [], "s", color="tab:green", label="total time of all tests")
+    axes[0][0].plot([], [], "o", color=GAIN_COLORS["gain"], label="mean time of successes")
+    axes[0][0].plot([], [], "s", color=GAIN_COLORS["total_gain"], label="total time of all tests")
     axes[0][0].legend(fontsize=7, loc="lower left")
     axes[0][0].set_yticks(list(y_of.values()), runs)
     axes[0][0].set_ylabel("training run")
@@ -381,7 +383,7 @@ def seeds_report(folders: list[Path], dest: Path) -> Path:
     """Write ``dest/seeds.md``, ``seeds.csv`` and ``seeds.png``; return the Markdown's path."""
     table = seeds_table(load_seeds(folders))
     dest.mkdir(parents=True, exist_ok=True)
-    table.to_csv(dest / "seeds.csv", index=False)
+    rounded(table).to_csv(dest / "seeds.csv", index=False)  # times to the ms
     plot_seeds(table, dest / "seeds.png")
     path = dest / "seeds.md"
     path.write_text(seeds_markdown(table, folders, dest, "seeds.png"))

@@ -31,7 +31,7 @@ from tqdm import tqdm
 
 from vgs.assembly.episode import EpisodeRunner, offset_policy
 from vgs.assembly.record import PHASES
-from vgs.columns import column, normalize_row
+from vgs.columns import column, normalize_row, rounded_rows
 from vgs.config import CellConfig, ExperimentConfig, PegConfig
 from vgs.errors import ConfigError, VGSError
 from vgs.experiments.sweepstats import paired_analysis, summarize
@@ -290,7 +290,7 @@ def write_csv(rows: Sequence[dict[str, Any]], path: str | Path) -> Path:
     with path.open("w", newline="") as fh:
         writer = csv.DictWriter(fh, fieldnames=list(COLUMNS))
         writer.writeheader()
-        writer.writerows(rows)
+        writer.writerows(rounded_rows(rows))  # times to the ms
     return path
 
 

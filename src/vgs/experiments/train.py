@@ -187,6 +187,7 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
         write_json(out / "run.json", new_meta)
 
     log = _TrainLog(out, rows, mode, state.episode, total, progress, position)
+    log.writer.add_text("config", config_text(cfg, mode), state.episode)
     source = _EpisodeSource(cfg, agent, runner, rng, schedule, backend, ray_address,
                             lambda: _assembly_plan(cfg, mode, state))
     try:
@@ -334,6 +335,17 @@ def _reward(cfg: ExperimentConfig, mode: str, state: TrainState, record: Episode
     r_grasp, r_asm = episode_reward(record.grasp_success, time_ok, state.threshold, mode,
                                     cfg.reward)
     return r_grasp, r_asm, threshold
+
+
+def config_text(cfg: ExperimentConfig, mode: str) -> str:
+    """The run's mode, provenance and resolved configuration as Markdown for TensorBoard's text
+    tab (tag ``config``, logged at every start and resume)."""
+    from vgs.config import to_dict
+    from vgs.jsonsafe import dumps
+    from vgs.runfolder import provenance
+
+    lines = dumps({"mode": mode, **provenance(), "config": to_dict(cfg)}, indent=2)
+    return "\n".join("    " + line for line in lines.splitlines())  # a Markdown code block
 
 
 class _TrainLog:

@@ -1,0 +1,70 @@
+"""Tables and figures a researcher would cite (issue 42, items 5 and 7): times written to the
+ms, one colour per policy in every figure, the report's title kept on a re-run with the gain
+in total time in results.csv, ``vgs train --workers``."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+import vgs.experiments
+from vgs.cli.options import config_from_args, flag_overrides
+from vgs.cli.parser import build_parser
+from vgs.columns import rounded, rounded_rows
+from vgs.experiments.palette import POLICY_COLORS, policy_color
+
+FIGURES = ("reportfigures.py", "curves.py", "seeds.py", "plots.py", "demo.py")
+
+
+def test_times_are_written_to_the_ms_and_nothing_else_moves() -> None:
+    df = pd.DataFrame({"assembly_time_s": [43.16000000001258, float("nan")],
+                       "time_search_s": [21.070000000003, 0.0], "grasp_offset_mm": [1.23456789,
+                                                                                     2.0]})
+    out = rounded(df)
+    assert out["assembly_time_s"].iloc[0] == 43.16 and out["time_search_s"].iloc[0] == 21.07
+    assert out["grasp_offset_mm"].iloc[0] == 1.23456789 and pd.isna(out["assembly_time_s"][1])
+    assert df["assembly_time_s"].iloc[0] == 43.16000000001258  # the caller's frame untouched
+    (row,) = rounded_rows([{"assembly_time_s": 43.16000000001258, "failure_reason": "x"}])
+    assert row == {"assembly_time_s": 43.16, "failure_reason": "x"}
+
+
+def test_one_colour_per_policy_in_every_figure() -> None:
+    """The figure modules take policy colours from vgs.experiments.palette; none names a
+    colour of the palette's policies itself (VGS was orange in one figure, red in another)."""
+    assert len(set(POLICY_COLORS.values())) == len(POLICY_COLORS)
+    assert policy_color("vgs") == "tab:red" and policy_color("mine:fn") not in \
+        POLICY_COLORS.values()
+    root = Path(vgs.experiments.__file__).parent
+    for name in FIGURES:
+        text = (root / name).read_text()
+        for colour in [*POLICY_COLORS.values(), "tab:orange", '"C1"', "'C1'"]:
+            assert colour not in text, (name, colour)
+
+
+def test_train_takes_workers_as_parallel_episodes() -> None:
+    args = build_parser().parse_args(["train", "--mode", "vgs", "--out", "x", "--workers",
+                                      "2", "--profile", "smoke"])
+    cfg = flag_overrides(config_from_args(args), args, {"workers": "train.parallel_episodes"})
+    assert cfg.train.parallel_episodes == 2
+
+
+@pytest.mark.slow
+def test_report_rerun_keeps_its_title_and_results_have_total_gain(quick_reproduction,
+                                                                   tmp_path: Path) -> None:
+    from vgs.experiments.report import build_report
+
+    assert quick_reproduction.proc.returncode == 0, quick_reproduction.proc.stderr
+    src = quick_reproduction.out
+    assert (src / "report.md").read_text().startswith("# VGS reproduction report (quick "
+                                                       "profile)")
+    copy = tmp_path / "repro"
+    shutil.copytree(src / "eval", copy / "eval")
+    shutil.copy(src / "reproduce.json", copy)
+    report = build_report(copy)  # as vgs report DIR does, no --title
+    assert report.read_text().splitlines()[0] == "# VGS reproduction report (quick profile)"
+    columns = pd.read_csv(copy / "results.csv").columns
+    assert {"total_gain_pct", "success_total_gain_pct", "gain_pct", "align_gain_pct"} \
+        <= set(columns)
