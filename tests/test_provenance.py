@@ -54,14 +54,18 @@ def test_installed_copy_records_its_versions(tmp_path: Path) -> None:
     meta = read_json(tmp_path / "run" / "run.json")
     assert meta["provenance"]["vgs_version"] == "0.0.1" and meta["resumed_with"] == [made]
 
-    run("evaluate", "--policy", "random", "--episodes", "1", "--workers", "1", "--out", "ev",
+    ev = tmp_path / "res" / "eval" / "random" / "nominal"
+    run("evaluate", "--policy", "random", "--episodes", "1", "--workers", "1", "--out", str(ev),
         *SMALL)
-    assert read_json(tmp_path / "ev" / "meta.json")["provenance"] == made
+    assert read_json(ev / "meta.json")["provenance"] == made
     import pyarrow.parquet as pq
 
-    schema = pq.read_schema(tmp_path / "ev" / "episodes.parquet").metadata
+    schema = pq.read_schema(ev / "episodes.parquet").metadata
     assert {k.decode(): v.decode() for k, v in schema.items() if not k.startswith(b"pandas")} \
         == made
+    run("report", "res")
+    assert (f"Test episodes made with vgs {vgs.__version__} (source installed package), MuJoCo "
+            f"{made['mujoco_version']}") in (tmp_path / "res" / "report.md").read_text()
 
 
 @pytest.mark.slow

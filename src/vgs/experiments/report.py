@@ -229,6 +229,18 @@ def _training_rows(out: Path) -> list[list[str]]:
     return rows
 
 
+def provenance_text(made: Any) -> str:
+    """``vgs 0.1.0 (source 1a2b3c4d5e), MuJoCo 4.0.0, torch 2.13.0`` of a recorded
+    :func:`vgs.runfolder.provenance`; ``""`` for folders written before it was recorded."""
+    if not isinstance(made, dict):
+        return ""
+    source = str(made.get("source_revision", "?"))
+    source = source if source in ("installed package", "unknown") else source[:10] + (
+        "+modified" if source.endswith("+modified") else "")
+    return (f"vgs {made.get('vgs_version', '?')} (source {source}), MuJoCo "
+            f"{made.get('mujoco_version', '?')}, torch {made.get('torch_version', '?')}")
+
+
 def build_report(out: Path, title: str | None = None) -> Path:
     """Write ``report.md``, ``report.html``, ``results.csv`` and figures into ``out``; the
     title defaults to the one ``vgs reproduce`` gives (the profile from ``reproduce.json``),
@@ -253,11 +265,14 @@ def build_report(out: Path, title: str | None = None) -> Path:
         doc.p(f"Profile `{meta.get('profile')}`, command `{meta.get('command')}`, on "
               f"{meta.get('machine', '?')}; git {str(meta.get('git_revision', '?'))[:10]}; "
               f"finished {meta.get('finished', '?')}.")
-        made = meta.get("provenance")
-        if isinstance(made, dict):
-            doc.p(f"Made with vgs {made.get('vgs_version', '?')} (source "
-                  f"{str(made.get('source_revision', '?'))[:18]}), MuJoCo "
-                  f"{made.get('mujoco_version', '?')}, torch {made.get('torch_version', '?')}.")
+        made = provenance_text(meta.get("provenance"))
+        if made:
+            doc.p(f"Made with {made}.")
+    tested = [provenance_text(read_json(m).get("provenance"))
+              for m in sorted((out / "eval").glob("**/meta.json"))]
+    tested = list(dict.fromkeys(t for t in tested if t))
+    if tested:
+        doc.p("Test episodes made with " + "; ".join(tested) + ".")
         stages = meta.get("stage_wall_s", {})
         if stages:
             doc.p("Wall time per stage: " + ", ".join(
