@@ -19,7 +19,7 @@ from gymnasium.utils.env_checker import check_env
 import vgs
 from vgs.assembly.record import EpisodeRecord
 from vgs.config import override, profile
-from vgs.envs.grasp_assemble import DEPTH_UNIT, GraspAssembleEnv
+from vgs.envs.grasp_assemble import DEPTH_UNIT, GraspAssembleEnv, make_config
 from vgs.errors import ConfigError
 from vgs.grasping.actions import peg_mask
 from vgs.grasping.rewards import derive_threshold
@@ -88,7 +88,9 @@ def test_reward_and_threshold_follow_training(monkeypatch: pytest.MonkeyPatch) -
     monkeypatch.setattr(env.runner, "run", fake_run)
     env.reset(seed=0)
     rewards, thresholds = [], []
-    for _ in range(4):
+    for i in range(4):
+        if i:
+            env.reset()  # every step ends an episode
         _, reward, terminated, _, info = env.step(np.array([0, 30, 30]))
         assert terminated and info["r_grasp"] == 0.3
         rewards.append(reward)
@@ -100,7 +102,9 @@ def test_reward_and_threshold_follow_training(monkeypatch: pytest.MonkeyPatch) -
     times = iter([50.0, 30.0])
     monkeypatch.setattr(baseline.runner, "run", fake_run)
     baseline.reset(seed=0)
-    assert [baseline.step(np.array([0, 1, 1]))[1] for _ in range(2)] == [0.3, 0.3]
+    first = baseline.step(np.array([0, 1, 1]))[1]
+    baseline.reset()
+    assert [first, baseline.step(np.array([0, 1, 1]))[1]] == [0.3, 0.3]
     env.reset(seed=0)  # a seeded reset starts the run over
     assert env.threshold_s is None and env.episodes == 0
 
@@ -205,3 +209,29 @@ def test_bad_action_is_one_config_error() -> None:
 def test_config_object_still_accepted() -> None:
     cfg = override(profile("smoke"), "cell.camera.size", 32)
     assert GraspAssembleEnv(cfg).observation_space["color"].shape == (32, 32, 3)
+
+
+def test_bad_actions_and_a_step_after_the_end_are_refused(monkeypatch) -> None:
+    """Actions of the wrong type, shape or range raise a clear error (no truncation of
+    fractions, booleans or negatives); a step after the episode ended needs a reset;
+    overrides get the command line's checks."""
+    env = small_env("vgs")
+    record = EpisodeRecord(seed=0, peg_mass=0.55, peg_length=0.1, grasp_success=False)
+    monkeypatch.setattr(env.runner, "run", lambda *a, **k: (record, None, None))
+    with pytest.raises(gymnasium.error.ResetNeeded):
+        env.step(np.array([0, 1, 1]))
+    env.reset(seed=0)
+    for bad, words in (((0, 1.5, 1), "integers"), ((True, 1, 1), "integers"),
+                       ((0, -1, 1), "outside"), ((0, 1), "shape"), ("abc", "shape"),
+                       (np.zeros((3, 1), int), "shape"), ((0, 10**6, 1), "outside")):
+        with pytest.raises(ConfigError, match=words):
+            env.step(bad)
+    env.step(np.array([0, 1, 1]))
+    with pytest.raises(gymnasium.error.ResetNeeded, match="ended"):
+        env.step(np.array([0, 1, 1]))
+    for overrides, field in (({"cell.peg.mass": True}, "cell.peg.mass"),
+                             ({"cell.camera.size": 60000}, "cell.camera.size"),
+                             ({"train.episodes": 10**30}, "train.episodes"),
+                             ({"cell.peg.length": 10.0}, "cell.peg.length")):
+        with pytest.raises(ConfigError, match=field):
+            make_config("smoke", overrides)

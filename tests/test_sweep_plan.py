@@ -10,6 +10,7 @@ import pytest
 
 from vgs.config import PegConfig, profile
 from vgs.errors import ConfigError, VGSError
+from vgs.experiments.journal import encode_row
 from vgs.experiments.plots import disturbing_moments
 from vgs.experiments.sweep import (
     COLUMNS,
@@ -137,18 +138,26 @@ def test_sweep_journal_resumes_and_refuses_another_sweep(tmp_path) -> None:
     row = {"index": 1, "offset_mm": 0.0, "peg_mass_kg": trials[1].peg.mass,
            "peg_length_mm": trials[1].peg.length * 1000, "seed": trials[1].seed,
            "assembly_time_s": None, "assembly_success": False}
-    journal.write_text(json.dumps(row) + "\n" + '{"index": 2, "off')  # torn last line
+    journal.write_text(encode_row(row) + '{"index": 2, "off')  # torn last line
     rows = read_journal(journal, trials)
     assert list(rows) == [1] and math.isnan(rows[1]["assembly_time_s"])
+    # a row without its checksum: refused, unless the folder predates the rule (any_legacy)
+    journal.write_text(json.dumps(row) + "\n")
+    with pytest.raises(VGSError, match="crc32"):
+        read_journal(journal, trials)
+    assert list(read_journal(journal, trials, any_legacy=True)) == [1]
+    journal.write_text(encode_row(row) * 2)
+    with pytest.raises(VGSError, match="repeats trial 1"):
+        read_journal(journal, trials)
     # a row written before the column vocabulary (mass_kg, length_mm, success, bare NaN)
     legacy = {"index": 1, "offset_mm": 0.0, "mass_kg": trials[1].peg.mass,
               "length_mm": trials[1].peg.length * 1000, "seed": trials[1].seed,
               "assembly_time_s": math.nan, "success": True}
     journal.write_text(json.dumps(legacy) + "\n")
-    rows = read_journal(journal, trials)
+    rows = read_journal(journal, trials, any_legacy=True)
     assert rows[1]["assembly_success"] is True and rows[1]["peg_mass_kg"] == trials[1].peg.mass
     assert math.isnan(rows[1]["assembly_time_s"]) and "success" not in rows[1]
-    journal.write_text(json.dumps({**row, "seed": 7}) + "\n")
+    journal.write_text(encode_row({**row, "seed": 7}))
     with pytest.raises(VGSError, match="another sweep"):
         read_journal(journal, trials)
 

@@ -63,3 +63,20 @@ class RunMismatchError(ConfigError):
 
 class FolderBusyError(VGSError):
     """Another vgs process holds the output folder's lock."""
+
+
+class EpisodeError(VGSError):
+    """An exception inside an episode (a bug, not a result): the run stops, naming the episode
+    and the error; the rows already journaled are kept."""
+
+
+class InterruptedBySignal(KeyboardInterrupt):
+    """SIGTERM (or SIGHUP) received: handled like Ctrl-C, ending with exit code 128 + signal.
+
+    Attributes:
+        signum: The signal's number.
+    """
+
+    def __init__(self, signum: int) -> None:
+        self.signum = signum
+        super().__init__(f"signal {signum}")

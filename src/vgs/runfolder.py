@@ -11,14 +11,20 @@ import contextlib
 import errno
 import fcntl
 import functools
-import json
 import os
 import platform
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from vgs.checkpoint import atomic_write_text
+from vgs.checkpoint import (
+    MAX_JOURNAL_BYTES,
+    MAX_JSON_BYTES,
+    atomic_write_text,
+    check_regular,
+    loads_json,
+    read_regular,
+)
 from vgs.errors import CorruptFileError, FolderBusyError, RunMismatchError
 from vgs.jsonsafe import dumps
 
@@ -36,7 +42,7 @@ def locked(folder: Path) -> Iterator[None]:
         FolderBusyError: If another process holds it.
     """
     folder.mkdir(parents=True, exist_ok=True)
-    fd = os.open(folder / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
+    fd = os.open(folder / LOCK_NAME, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
     try:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -54,19 +60,15 @@ def locked(folder: Path) -> Iterator[None]:
 
 
 def read_json(path: Path, kind: type = dict) -> Any:
-    """The JSON document in ``path``, which must be a ``kind``.
+    """The JSON document in ``path``, which must be a ``kind``: a regular file (no symlink,
+    device or FIFO) of at most 16 MiB, nested at most 32 deep
+    (:func:`vgs.checkpoint.read_regular`, :func:`vgs.checkpoint.loads_json`).
 
     Raises:
-        CorruptFileError: If it is empty, not UTF-8, not JSON or not a ``kind``.
+        CorruptFileError: If it is empty, not UTF-8, not JSON, not a ``kind``, a special file or
+            too large.
     """
-    try:
-        data = json.loads(path.read_bytes().decode("utf-8"))
-    except UnicodeDecodeError:
-        raise CorruptFileError(path, "is not UTF-8 text") from None
-    except json.JSONDecodeError as exc:
-        what = "is empty" if not path.read_bytes().strip() else f"is not JSON ({exc.msg}, line " \
-                                                                 f"{exc.lineno})"
-        raise CorruptFileError(path, f"{what}; restore it or use a new folder") from None
+    data = loads_json(read_regular(path, MAX_JSON_BYTES), path)
     if not isinstance(data, kind):
         raise CorruptFileError(path, f"holds a {type(data).__name__}, not a "
                                      f"{kind.__name__}")
@@ -211,6 +213,7 @@ def read_table(path: Path) -> Any:
 
     from vgs.columns import normalize
 
+    check_regular(path, MAX_JOURNAL_BYTES)  # no symlink, device or FIFO; bounded
     try:
         if path.suffix == ".parquet":
             return normalize(pd.read_parquet(path))

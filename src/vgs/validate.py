@@ -35,7 +35,7 @@ def check_seed(field: str, value: Any) -> int:
         ConfigError: ``field`` otherwise.
     """
     if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= _MAX_SEED:
-        raise ConfigError(field, f"a seed must be a non-negative integer, got {value!r}")
+        raise ConfigError(field, f"a seed must be a non-negative integer, got {_shown(value)}")
     return value
 
 
@@ -58,36 +58,37 @@ def _coerce(field: str, value: Any, tp: Any) -> Any:
                 return _coerce(field, value, option)
             except ConfigError as exc:
                 errors.append(exc)
-        raise ConfigError(field, f"expected {_describe(tp)}, got {value!r}")
+        raise ConfigError(field, f"expected {_describe(tp)}, got {_shown(value)}")
     if origin is tuple:
         args = typing.get_args(tp)
         if not isinstance(value, tuple):
-            raise ConfigError(field, f"expected a tuple, got {value!r}")
+            raise ConfigError(field, f"expected a tuple, got {_shown(value)}")
         if len(args) == 2 and args[1] is Ellipsis:
             return tuple(_coerce(f"{field}[{i}]", v, args[0]) for i, v in enumerate(value))
         if args and len(args) != len(value):
-            raise ConfigError(field, f"expected {len(args)} items, got {value!r}")
+            raise ConfigError(field, f"expected {len(args)} items, got {_shown(value)}")
         return tuple(_coerce(f"{field}[{i}]", v, a)
                      for i, (v, a) in enumerate(zip(value, args, strict=False)))
     if tp is float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ConfigError(field, f"expected a number, got {value!r}")
-        if isinstance(value, int) and not math.isfinite(float(value)):
-            raise ConfigError(field, f"number out of range: {value!r}")
+            raise ConfigError(field, f"expected a number, got {_shown(value)}")
+        if isinstance(value, int) and abs(value) > 1e300:  # float() of it would overflow
+            raise ConfigError(field, f"number out of range: a number of {len(str(value))} "
+                                     "digits")
         if not math.isfinite(value):  # run folders record the configuration as strict JSON
             raise ConfigError(field, f"must be a finite number, got {value!r}")
         return float(value)
     if tp is int:
         if isinstance(value, bool) or not isinstance(value, int):
-            raise ConfigError(field, f"expected an integer, got {value!r}")
+            raise ConfigError(field, f"expected an integer, got {_shown(value)}")
         return value
     if tp is bool:
         if not isinstance(value, bool):
-            raise ConfigError(field, f"expected True or False, got {value!r}")
+            raise ConfigError(field, f"expected True or False, got {_shown(value)}")
         return value
     if tp is str:
         if not isinstance(value, str):
-            raise ConfigError(field, f"expected a string, got {value!r}")
+            raise ConfigError(field, f"expected a string, got {_shown(value)}")
         return value
     return value  # an annotation this checker does not know: the dataclass checks it
 
@@ -116,13 +117,59 @@ def _walk(cfg: Any, prefix: str) -> Any:
     return replace(cfg, **changes) if changes else cfg
 
 
-def check_config(cfg: Any) -> Any:
-    """``cfg`` with its types checked and ints of float fields made floats; seeds checked.
+# What the machine can hold and the cell can be: every numeric setting that sizes memory, time
+# or the physics has a bound, checked with the types (dotted path -> (lowest, highest)).
+MAX_EPISODES = 1_000_000
+BOUNDS: dict[str, tuple[float, float]] = {
+    "train.episodes": (1, MAX_EPISODES), "eval.episodes": (1, MAX_EPISODES),
+    "train.checkpoint_every": (1, MAX_EPISODES), "train.parallel_episodes": (1, 256),
+    "agent.random_episodes": (0, MAX_EPISODES), "agent.replay_capacity": (1, 1_000_000),
+    "agent.replay_batch": (1, 1024), "agent.target_update_period": (1, MAX_EPISODES),
+    "agent.delta_q_window": (1, MAX_EPISODES),
+    "network.num_rotations": (1, 64),
+    "cell.camera.size": (16, 1024), "cell.camera.pixel_size": (1e-4, 0.02),
+    "cell.camera.height": (0.1, 5.0),
+    "cell.peg.mass": (1e-3, 50.0), "cell.peg.length": (0.05, 0.5),
+    "cell.peg.diameter": (1e-3, 0.11), "cell.hole.depth": (1e-3, 0.5),
+    "cell.hole.clearance": (0.0, 0.05), "cell.hole.outer_radius": (1e-3, 0.3),
+    "cell.hole.segments": (8, 512), "cell.hole.peg_diameter": (1e-3, 0.11),
+    "cell.sim.timestep": (1e-5, 0.01), "cell.sim.control_decimation": (1, 1000),
+    "cell.sim.noslip_iterations": (0, 1000),
+    "reproduce.sweep_offsets": (0, 1000), "reproduce.sweep_trials": (0, 100_000),
+}
+
+
+def _shown(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else f"{text[:40]}... ({len(text)} characters)"
+
+
+def check_bounds(cfg: Any) -> None:
+    """Every field of :data:`BOUNDS` within its bound.
 
     Raises:
-        ConfigError: Naming the first field with a wrong type or a bad seed.
+        ConfigError: Naming the field and the bound.
+    """
+    for path, (low, high) in BOUNDS.items():
+        value: Any = cfg
+        for name in path.split("."):
+            value = getattr(value, name, None)
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            continue
+        if not low <= value <= high:
+            raise ConfigError(path, f"must lie in [{low:g}, {high:g}], got {_shown(value)}")
+
+
+def check_config(cfg: Any) -> Any:
+    """``cfg`` with its types checked and ints of float fields made floats; seeds and the
+    bounds of :data:`BOUNDS` checked.
+
+    Raises:
+        ConfigError: Naming the first field with a wrong type, a bad seed or a value out of
+            its bound.
     """
     cfg = _walk(cfg, "")
+    check_bounds(cfg)
     check_seed("seed", cfg.seed)
     check_seed("reproduce.eval_seed", cfg.reproduce.eval_seed)
     for i, seed in enumerate(cfg.reproduce.train_seeds):

@@ -13,7 +13,8 @@ import pytest
 import torch
 
 from vgs.config import profile, to_dict
-from vgs.errors import ConfigError
+from vgs.errors import ConfigError, EpisodeError
+from vgs.experiments import episodepool
 from vgs.experiments.evaluate import (
     EvalSpec,
     evaluate,
@@ -24,7 +25,7 @@ from vgs.experiments.train import TrainState, save_checkpoint
 from vgs.grasping.agent import DeltaQMonitor, GraspAgent
 from vgs.grasping.replay import ReplayBuffer
 
-from . import eval_policies
+from . import eval_policies, fakes
 
 POLICIES = eval_policies.__name__
 VOLATILE = ["wall_s"]
@@ -106,12 +107,15 @@ def test_ray_backend_gives_the_local_rows(cfg, run_dir, one_worker, tmp_path) ->
 
 
 @pytest.mark.slow
-def test_an_episode_that_raises_becomes_a_failure_row(cfg, tmp_path) -> None:
-    df = evaluate(cfg, EvalSpec(f"{POLICIES}:raising", "nominal", 2, seed=1), tmp_path,
-                  workers=2, progress=False)
-    assert len(df) == 2
-    assert not df["assembly_success"].any()
-    assert all(r.startswith("error:RuntimeError: policy exploded") for r in df["failure_reason"])
+def test_an_episode_that_raises_stops_the_run(cfg, tmp_path) -> None:
+    """A bug is not a result: the run stops naming the episode and the error, and writes no
+    row for it (nor a table)."""
+    with pytest.raises(EpisodeError, match=r"episode \d \(seed \d+\) raised RuntimeError: "
+                                           "policy exploded"):
+        evaluate(cfg, EvalSpec(f"{POLICIES}:raising", "nominal", 2, seed=1), tmp_path,
+                 workers=2, progress=False)
+    assert not (tmp_path / "journal.jsonl").read_text()
+    assert not (tmp_path / "episodes.csv").exists()
 
 
 @pytest.mark.slow
@@ -125,8 +129,9 @@ def test_a_lost_worker_is_retried(cfg, tmp_path, monkeypatch) -> None:
     assert always["failure_reason"].iloc[0] == "worker_lost"
 
 
-def test_resume_skips_journaled_episodes(cfg, tmp_path) -> None:
-    spec = EvalSpec(f"{POLICIES}:raising", "nominal", 3, seed=1)
+def test_resume_skips_journaled_episodes(cfg, tmp_path, monkeypatch) -> None:
+    monkeypatch.setattr(episodepool, "EpisodeRunner", fakes.FakeRunner)  # no physics
+    spec = EvalSpec("random", "nominal", 3, seed=1)
     evaluate(cfg, replace(spec, episodes=2), tmp_path, workers=1, progress=False)
     journal = tmp_path / "journal.jsonl"
     lines = journal.read_text().splitlines()
@@ -137,7 +142,8 @@ def test_resume_skips_journaled_episodes(cfg, tmp_path) -> None:
     assert [r["index"] for r in kept] == [0, 1, 2]  # the torn line is gone
 
 
-def test_bad_input_is_a_config_error(cfg, tmp_path) -> None:
+def test_bad_input_is_a_config_error(cfg, tmp_path, monkeypatch) -> None:
+    monkeypatch.setattr(episodepool, "EpisodeRunner", fakes.FakeRunner)  # no physics
     with pytest.raises(ConfigError, match="policy"):
         evaluate(cfg, EvalSpec("no_such_policy", "nominal", 1), tmp_path, progress=False)
     with pytest.raises(ConfigError, match="condition"):
@@ -147,11 +153,9 @@ def test_bad_input_is_a_config_error(cfg, tmp_path) -> None:
                  progress=False)
     with pytest.raises(ConfigError, match="workers"):
         evaluate(cfg, EvalSpec("center", "nominal", 1), tmp_path, workers=0, progress=False)
-    evaluate(cfg, EvalSpec(f"{POLICIES}:raising", "nominal", 1), tmp_path / "a",
-             progress=False)
+    evaluate(cfg, EvalSpec("random", "nominal", 1), tmp_path / "a", progress=False)
     with pytest.raises(ConfigError, match="another evaluation"):
-        evaluate(cfg, EvalSpec(f"{POLICIES}:raising", "mass", 1), tmp_path / "a",
-                 progress=False)
+        evaluate(cfg, EvalSpec("random", "mass", 1), tmp_path / "a", progress=False)
 
 
 def test_heuristic_workers_start_without_torch() -> None:
@@ -201,6 +205,11 @@ def test_a_run_that_trained_on_is_another_policy(cfg, tmp_path: Path) -> None:
     meta = json.loads((out / "meta.json").read_text())
     assert meta["policy_trained_episodes"] == 3
     evaluate(cfg, spec, out, progress=False)  # the same checkpoint: resumes
+    # another network of the same length under the same path: its weights tell
+    save_agent(run / "checkpoint.pt", GraspAgent(cfg.network, cfg.agent, seed=6), cfg,
+               episode=3)
+    with pytest.raises(ConfigError, match="policy_digest"):
+        evaluate(cfg, spec, out, progress=False)
     save_agent(run / "checkpoint.pt", agent, cfg, episode=9)
     with pytest.raises(ConfigError, match="policy_trained_episodes"):
         evaluate(cfg, spec, out, progress=False)

@@ -212,3 +212,163 @@ def test_every_damaged_file_resumes_identically_or_is_refused_in_one_line(
             shutil.rmtree(out)
     # Damage to the files a resume relies on is refused; the rest is rewritten.
     assert outcomes["refused"] >= 8 and outcomes["identical"] >= 8, outcomes
+
+
+# -- hostile files and signals (issue 41) -------------------------------------------------------
+
+HOSTILE = ("cut", "garbage", "deep_nesting", "symlink_out", "device", "fifo", "oversized")
+
+
+def _hostile(path: Path, how: str, outside: Path) -> None:
+    """Damage ``path`` the way ``how`` says; ``outside`` is a folder outside the run."""
+    data = path.read_bytes()
+    if how == "cut":
+        path.write_bytes(data[:max(1, len(data) // 3)])
+    elif how == "garbage":
+        path.write_bytes(os.urandom(64) + data[len(data) // 2:])
+    elif how == "deep_nesting":  # as a whole file and as a journal's line
+        path.write_bytes(b"[" * 50_000 + b"]" * 50_000 + b"\n" + data)
+    elif how == "symlink_out":  # the same bytes, but outside the folder
+        copy = outside / f"{path.name}.outside"
+        copy.write_bytes(data)
+        path.unlink()
+        path.symlink_to(copy)
+    elif how == "device":
+        path.unlink()
+        path.symlink_to("/dev/zero")
+    elif how == "fifo":
+        path.unlink()
+        os.mkfifo(path)
+    elif how == "oversized":  # sparse: 9 GiB that nothing may read whole
+        with path.open("r+b") as fh:
+            fh.truncate(9 << 30)
+
+
+def _readers(kind: str, out: Path, scratch: Path) -> list[list[str]]:
+    """Every command that reads a folder of ``kind``."""
+    if kind == "train":
+        return [["train", "--mode", "vgs", "--episodes", "6", "--out", str(out),
+                 *fakes.CLI_FLAGS], ["status", str(out)],
+                ["export-policy", str(out), "--out", str(scratch / "policy")],
+                ["evaluate", "--policy", str(out), "--episodes", "1", "--workers", "1",
+                 "--out", str(scratch / "eval"), *fakes.CLI_FLAGS]]
+    if kind == "eval":
+        return [["evaluate", "--policy", "random", "--condition", "mass", "--episodes", "8",
+                 "--seed", str(EVAL_SEED), "--workers", "1", "--out", str(out),
+                 *fakes.CLI_FLAGS], ["status", str(out)]]
+    return [["sweep", "--offsets-mm=0,5", "--trials", "2", "--workers", "1", "--out", str(out),
+             *fakes.CLI_FLAGS]]
+
+
+@pytest.fixture(scope="module")
+def sweep_reference(tmp_path_factory: pytest.TempPathFactory, fake_physics) -> Path:
+    from vgs.experiments import sweep as sweep_mod
+
+    saved = sweep_mod.EpisodeRunner
+    sweep_mod.EpisodeRunner = fakes.FakeRunner  # type: ignore[misc]
+    out = tmp_path_factory.mktemp("sweep") / "sweep"
+    assert main(["sweep", "--offsets-mm=0,5", "--trials", "2", "--workers", "1", "--out",
+                 str(out), *fakes.CLI_FLAGS]) == 0
+    yield out
+    sweep_mod.EpisodeRunner = saved
+
+
+def _alarm(signum: int, frame: object) -> None:
+    raise TimeoutError("a command hung on a hostile file")
+
+
+@pytest.mark.parametrize("kind", ["train", "eval", "sweep"])
+def test_hostile_files_for_every_reader(kind: str, tmp_path: Path, reference, sweep_reference,
+                                        capsys: pytest.CaptureFixture[str],
+                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every file a run keeps, times every kind of damage, for every command that reads it:
+    the command finishes with the uninterrupted table or refuses in one line (exit 2); it never
+    hangs (FIFO), reads without bound (device, oversized), follows a link out of the folder or
+    writes through it, nor ends in a traceback."""
+    from vgs.experiments import sweep as sweep_mod
+
+    monkeypatch.setattr(os, "cpu_count", lambda: 1)
+    monkeypatch.setattr(sweep_mod, "EpisodeRunner", fakes.FakeRunner)
+    ref = sweep_reference if kind == "sweep" else reference[kind]
+    names = [p.relative_to(ref) for p in _files(ref)
+             if "tensorboard" not in p.parts and p.name != ".lock"]
+    old = signal.signal(signal.SIGALRM, _alarm)
+    refused = 0
+    try:
+        for name in names:
+            for how in HOSTILE:
+                for i, argv in enumerate(_readers(kind, tmp_path / "run", tmp_path / "x")):
+                    for folder in ("run", "x", "outside"):
+                        shutil.rmtree(tmp_path / folder, ignore_errors=True)
+                    (tmp_path / "outside").mkdir()
+                    shutil.copytree(ref, tmp_path / "run")
+                    _hostile(tmp_path / "run" / name, how, tmp_path / "outside")
+                    before = {p.name: p.read_bytes() for p in (tmp_path / "outside").iterdir()}
+                    signal.alarm(30)
+                    try:
+                        rc, lines = fakes.vgs(capsys, *argv)
+                    finally:
+                        signal.alarm(0)
+                    what = (str(name), how, argv[0], lines)
+                    assert rc in (0, 2), what
+                    if rc == 2:
+                        assert len(lines) == 1 and lines[0].startswith("vgs: error: "), what
+                        refused += 1
+                    elif i == 0 and kind != "sweep":
+                        _tables_equal(kind, tmp_path / "run", ref)
+                    after = {p.name: p.read_bytes() for p in (tmp_path / "outside").iterdir()}
+                    assert after == before, what  # nothing written through a link
+    finally:
+        signal.signal(signal.SIGALRM, old)
+    assert refused >= 2 * len(HOSTILE), refused  # at least the metadata and the journal
+
+
+def test_sigterm_stops_workers_and_resumes(tmp_path: Path, reference) -> None:
+    """SIGTERM to ``vgs evaluate --workers 2`` ends in one line and exit code 143, its worker
+    processes stopped; run again, the evaluation ends with the uninterrupted table."""
+    import subprocess
+    import sys
+
+    out = tmp_path / "eval"
+    argv = ["evaluate", "--policy", "random", "--condition", "mass", "--episodes", "8", "--seed",
+            str(EVAL_SEED), "--workers", "2", "--out", str(out), *fakes.CLI_FLAGS]
+    code = f"from experiments import fakes; fakes.run_cli({argv!r}, 0.0)"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(Path(__file__).parents[1]), os.environ.get("PYTHONPATH", "")])}
+    proc = subprocess.Popen([sys.executable, "-c", code], env=env, stderr=subprocess.PIPE,
+                            text=True)
+    children: set[int] = set()
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and len(children) < 2 and proc.poll() is None:
+        time.sleep(0.2)
+        children = _children(proc.pid)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    lines = [line for line in err.splitlines() if not line.startswith("eval ")]
+    assert proc.returncode == 143, err
+    assert lines == ["vgs: stopped by SIGTERM; run the same command again to resume (finished "
+                     "episodes are kept)"], err
+    time.sleep(1.0)
+    assert not {pid for pid in children if _alive(pid)}, "worker processes left running"
+    _evaluate(out)
+    _tables_equal("eval", out, reference["eval"])
+
+
+def _children(pid: int) -> set[int]:
+    found = set()
+    for status in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = status.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid:
+            found.add(int(status.parent.name))
+    return found
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"

@@ -252,8 +252,10 @@ def test_unreadable_journals_and_metadata_are_refused_naming_file_and_line(
         "duplicate": (b"".join(lines[:3]) + lines[1] + lines[3], "journal.jsonl:4", "repeats"),
         "not utf-8": (lines[0] + b"\xff\xfe\n" + b"".join(lines[1:]), "journal.jsonl:2",
                       "UTF-8"),
-        "not a row": (lines[0] + b'{"hello": 1}\n' + b"".join(lines[1:]), "journal.jsonl:2",
-                      "not an episode row"),
+        "not a row": (lines[0] + encode_row({"hello": 1}).encode() + b"".join(lines[1:]),
+                      "journal.jsonl:2", "not an episode row"),
+        "no checksum": (lines[0] + b'{"index": 1}\n' + b"".join(lines[2:]), "journal.jsonl:2",
+                        "without its crc32"),
         "not json": (lines[0] + b"hello\n" + b"".join(lines[1:]), "journal.jsonl:2", "JSON"),
     }
     for name, (data, where, words) in cases.items():

@@ -13,6 +13,7 @@ import pytest
 from vgs import checkpoint
 from vgs.config import profile, to_dict
 from vgs.errors import ConfigError
+from vgs.experiments.journal import encode_row
 from vgs.experiments.layout import eval_jobs, train_runs
 from vgs.experiments.status import eval_progress, folder_status, format_status, train_progress
 
@@ -67,7 +68,7 @@ def test_evaluation_with_a_torn_journal_line(tmp_path: Path) -> None:
     out.mkdir()
     (out / "meta.json").write_text(json.dumps({"episodes": 5}))
     rows = [{"index": i, "success": i != 1, "wall_s": 3.0} for i in range(3)]
-    (out / "journal.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows) + '{"ind')
+    (out / "journal.jsonl").write_text("".join(encode_row(r) for r in rows) + '{"ind')
     p = eval_progress(out)
     assert (p.done, p.total, p.finished) == (3, 5, False)
     assert p.note == "assembled 2/3" and p.seconds_per_episode == pytest.approx(3.0)
@@ -78,7 +79,7 @@ def test_evaluation_with_all_episodes_in_but_no_tables_yet(tmp_path: Path) -> No
     out.mkdir()
     (out / "meta.json").write_text(json.dumps({"episodes": 2}))
     (out / "journal.jsonl").write_text(
-        "".join(json.dumps({"index": i, "success": True, "wall_s": 1.0}) + "\n" for i in (0, 1)))
+        "".join(encode_row({"index": i, "success": True, "wall_s": 1.0}) for i in (0, 1)))
     p = eval_progress(out)
     assert (p.done, p.finished) == (2, False)
     assert "all episodes in, tables written when the evaluation ends" in p.note
@@ -101,7 +102,7 @@ def test_reproduction_folder(tmp_path: Path) -> None:
     done_job.folder.mkdir(parents=True)
     (done_job.folder / "meta.json").write_text(json.dumps({"episodes": 5}))
     (done_job.folder / "journal.jsonl").write_text(
-        "".join(json.dumps({"index": i, "success": True, "wall_s": 1.0}) + "\n"
+        "".join(encode_row({"index": i, "success": True, "wall_s": 1.0})
                 for i in range(5)))
     (done_job.folder / "summary.json").write_text("{}")
     sections = dict(folder_status(out))

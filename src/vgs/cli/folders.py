@@ -8,7 +8,10 @@ import argparse
 from pathlib import Path
 
 from vgs.config import ExperimentConfig
+from vgs.errors import ConfigError
 from vgs.jsonsafe import dumps
+
+MAX_HEATMAP_SCENES = 16  # rows of the figure
 
 
 def cmd_export_policy(args: argparse.Namespace, cfg: ExperimentConfig | None) -> int:
@@ -29,6 +32,8 @@ def cmd_heatmap(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     """Q-value heat maps of a training run, untrained beside trained (paper Figure 7)."""
     from vgs.experiments.heatmap import plot_heatmaps
 
+    if not 1 <= args.scenes <= MAX_HEATMAP_SCENES:
+        raise ConfigError("scenes", f"must lie in [1, {MAX_HEATMAP_SCENES}], got {args.scenes}")
     out = plot_heatmaps(Path(args.run_dir), Path(args.out), scenes=args.scenes)
     print(f"wrote {out}")
     return 0

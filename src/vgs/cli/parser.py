@@ -5,8 +5,12 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
+import signal
 import sys
+import threading
 from collections.abc import Sequence
+from typing import Any
 
 from vgs.cli.folders import (
     cmd_curves,
@@ -33,7 +37,7 @@ from vgs.cli.runs import (
     cmd_train,
 )
 from vgs.config import CONDITIONS
-from vgs.errors import VGSError
+from vgs.errors import InterruptedBySignal, VGSError
 
 
 def _config_flags(p: argparse.ArgumentParser, sections: tuple[str, ...] = ()) -> None:
@@ -269,11 +273,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         argv: Arguments without the program name (default: ``sys.argv[1:]``).
     """
     args = None
+    handlers = _catch_termination()
     try:
         args, extra = build_parser().parse_known_args(argv)
         if extra:  # a flag another command takes, or one no command does
             raise UsageError(f"{args.command}: does not take {' '.join(extra)} (vgs "
                              f"{args.command} --help lists what it takes)")
+        check_paths(args)  # before any work
         cfg = config_from_args(args) if hasattr(args, "profile") else None
         return args.func(args, cfg)
     except VGSError as exc:
@@ -287,12 +293,70 @@ def main(argv: Sequence[str] | None = None) -> int:
         # permission. The run's files are as the last completed write left them.
         where = f"{exc.filename}: " if exc.filename else ""
         return _error(f"{where}{exc.strerror or exc}")
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)  # one line, however often it is pressed
         command = getattr(args, "command", None)
         again = ("; run the same command again to resume (finished episodes are kept)"
                  if command in RESUMABLE else "")
+        if isinstance(exc, InterruptedBySignal):
+            print(f"vgs: stopped by {signal.Signals(exc.signum).name}{again}", file=sys.stderr)
+            return 128 + exc.signum
         print(f"vgs: interrupted{again}", file=sys.stderr)
         return 130
+    finally:
+        for signum, handler in handlers.items():
+            signal.signal(signum, handler)
+
+
+def _catch_termination() -> dict[int, Any]:
+    """Handle SIGTERM and SIGHUP like Ctrl-C (:class:`vgs.errors.InterruptedBySignal`): the
+    command stops its workers and ends with one line and exit code 128 + signal (143 for
+    SIGTERM). Returns the handlers it replaced (none outside the main thread)."""
+    if threading.current_thread() is not threading.main_thread():
+        return {}
+
+    def stop(signum: int, frame: Any) -> None:
+        for name in (signal.SIGTERM, signal.SIGHUP):  # the first signal stops, later ones wait
+            signal.signal(name, signal.SIG_IGN)
+        raise InterruptedBySignal(signum)
+
+    old = {}
+    for signum in (signal.SIGTERM, signal.SIGHUP):
+        old[signum] = signal.signal(signum, stop)
+    old[signal.SIGINT] = signal.getsignal(signal.SIGINT)
+    return old
+
+
+_SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*:")
+_PATH_ARGS = ("out", "publish", "dir", "run_dir", "runs", "dirs")
+
+
+def check_paths(args: argparse.Namespace) -> None:
+    """Refuse empty, URI-like (``file:/x``, ``s3://b``) and non-UTF-8 paths before any work: an
+    empty ``--out`` would write into the current folder, a URI-like one is taken as a URL by the
+    table writers, and a name that is not UTF-8 fails only when the tables are written.
+
+    Raises:
+        UsageError: Naming the argument.
+    """
+    for name in _PATH_ARGS:
+        value = getattr(args, name, None)
+        for item in value if isinstance(value, list) else [value]:
+            if not isinstance(item, str):
+                continue
+            flag = f"--{name.replace('_', '-')}" if name in ("out", "publish") else name.upper()
+            if not item.strip():
+                raise UsageError(f"{flag}: is empty; name a folder or file")
+            try:
+                item.encode("utf-8")
+            except UnicodeEncodeError:
+                raise UsageError(f"{flag}: {item.encode('utf-8', 'surrogateescape')!r} is not "
+                                 "UTF-8; use a name in UTF-8") from None
+            if _SCHEME.match(item):
+                raise UsageError(f"{flag}: {item!r} looks like a URI; give a local path (a "
+                                 "first component without ':')")
+            if "\0" in item:
+                raise UsageError(f"{flag}: holds a NUL character")
 
 
 RESUMABLE = ("train", "evaluate", "reproduce")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from vgs.config.checks import _non_negative, _positive
+from vgs.config.checks import _finite, _non_negative, _positive, shown
 from vgs.errors import ConfigError
 
 
@@ -65,8 +65,8 @@ class HoleConfig:
     peg_diameter: float = 0.030
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.clearance) and self.clearance > 0):
-            raise ConfigError("hole.clearance", f"must be > 0, got {self.clearance!r}")
+        if not (_finite(self.clearance) and self.clearance > 0):
+            raise ConfigError("hole.clearance", f"must be > 0, got {shown(self.clearance)}")
         _positive(self, "depth", "outer_radius", "friction", "peg_diameter", prefix="hole.")
         if self.segments < 8:
             raise ConfigError("hole.segments", f"must be >= 8, got {self.segments}")

@@ -8,18 +8,29 @@ from typing import Any
 from vgs.errors import ConfigError
 
 
+def _finite(value: Any) -> bool:
+    """Whether ``value`` is a number a float can hold (an int of 400 digits is not)."""
+    return isinstance(value, (int, float)) and abs(value) <= 1e300 and math.isfinite(value)
+
+
+def shown(value: Any) -> str:
+    """``repr(value)``, cut to 60 characters for a one-line message."""
+    text = repr(value)
+    return text if len(text) <= 60 else f"{text[:40]}... ({len(text)} characters)"
+
+
 def _positive(obj: Any, *names: str, prefix: str = "") -> None:
     for name in names:
         value = getattr(obj, name)
-        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-            raise ConfigError(f"{prefix}{name}", f"must be a positive number, got {value!r}")
+        if not (_finite(value) and value > 0):
+            raise ConfigError(f"{prefix}{name}", f"must be a positive number, got {shown(value)}")
 
 
 def _non_negative(obj: Any, *names: str, prefix: str = "") -> None:
     for name in names:
         value = getattr(obj, name)
-        if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
-            raise ConfigError(f"{prefix}{name}", f"must be >= 0, got {value!r}")
+        if not (_finite(value) and value >= 0):
+            raise ConfigError(f"{prefix}{name}", f"must be >= 0, got {shown(value)}")
 
 
 def _fraction(obj: Any, *names: str, prefix: str = "") -> None:

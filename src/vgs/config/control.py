@@ -53,6 +53,14 @@ class ControllerConfig:
             raise ConfigError("controller.joint_kp", "needs six values, one per UR5 joint")
 
 
+# The assembly's phases and their default time-outs [simulated s]; every phase needs one.
+_DEFAULT_TIMEOUTS: tuple[tuple[str, float], ...] = (
+    ("transport", 20.0), ("approach", 20.0), ("search", 120.0), ("slide", 30.0),
+    ("align", 60.0), ("insert", 30.0),
+)
+MAX_PHASE_TIMEOUT_S = 3600.0
+
+
 @dataclass(frozen=True)
 class AssemblyConfig:
     """The compliance-based assembly module (paper 3.2, Figure 5).
@@ -73,7 +81,7 @@ class AssemblyConfig:
         hop_step: Distance between two touch-downs along the spiral [m] (from the centre the
             second lies half a turn on). At 6 deg the rim point sinks ``drop_threshold`` only
             within a strip about 10 mm wide along the lean, from 6 mm short of the hole's axis
-            to its far wall (137 mm^2, 18 % of the hole: ``benchmarks/touchdown_geometry.py``):
+            to its far wall (137 mm^2, 18 % of the hole; docs/assembly.md):
             6 mm apart, a spiral can step over it, and a new search turns its spiral.
         search_radius: Largest spiral radius [m]; the spiral starts again from its centre
             beyond it (the hole lies within its own radius of the nominal position).
@@ -205,14 +213,7 @@ class AssemblyConfig:
     hop_settle_time: float = 0.1
     hop_descent_speed: float = 0.003
     hop_rot_stiffness: float = 100.0
-    timeouts: tuple[tuple[str, float], ...] = (
-        ("transport", 20.0),
-        ("approach", 20.0),
-        ("search", 120.0),
-        ("slide", 30.0),
-        ("align", 60.0),
-        ("insert", 30.0),
-    )
+    timeouts: tuple[tuple[str, float], ...] = _DEFAULT_TIMEOUTS
 
     def __post_init__(self) -> None:
         _positive(
@@ -243,9 +244,27 @@ class AssemblyConfig:
             if isinstance(value, bool) or not isinstance(value, int) or value < least:
                 raise ConfigError(f"assembly.{name}",
                                   f"must be an integer >= {least}, got {value!r}")
-        for name, value in self.timeouts:
-            if value <= 0:
-                raise ConfigError(f"assembly.timeouts.{name}", f"must be > 0, got {value}")
+        phases = [name for name, _ in _DEFAULT_TIMEOUTS]
+        names = [item[0] if isinstance(item, tuple) and len(item) == 2 else item
+                 for item in self.timeouts]
+        for item, name in zip(self.timeouts, names, strict=True):
+            if not (isinstance(item, tuple) and len(item) == 2):
+                raise ConfigError("assembly.timeouts", f"expected (phase, seconds) pairs, got "
+                                                       f"{item!r}")
+            if name not in phases:
+                raise ConfigError("assembly.timeouts", f"names no phase {name!r} (every phase "
+                                                       f"needs a time-out: {', '.join(phases)})")
+            value = item[1]
+            if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                    or not 0 < value <= MAX_PHASE_TIMEOUT_S:
+                raise ConfigError(f"assembly.timeouts.{name}", f"must lie in (0, "
+                                  f"{MAX_PHASE_TIMEOUT_S:g}] s, got {value!r}")
+        if sorted(names) != sorted(phases):
+            missing = [p for p in phases if p not in names] or [
+                p for p in phases if names.count(p) > 1]
+            raise ConfigError("assembly.timeouts", f"every phase needs one time-out "
+                                                   f"({', '.join(phases)}); {missing[0]!r} is "
+                                                   "missing or repeated")
 
     def timeout(self, phase: str) -> float:
         return dict(self.timeouts)[phase]

@@ -64,6 +64,7 @@ from vgs.experiments.policies import action_angle, pixel_command
 from vgs.grasping.actions import peg_mask
 from vgs.grasping.rewards import MODES, episode_reward, next_threshold
 from vgs.sim.camera import Heightmap
+from vgs.validate import check_config
 
 DEPTH_UNIT = 0.0005  # metres per unit of the uint8 depth observation
 RENDER_MODES = ("rgb_array", "rgb_array_list")
@@ -90,11 +91,12 @@ def make_config(cfg: ExperimentConfig | str | None,
     for path, value in (overrides or {}).items():
         try:
             cfg = override(cfg, path, value)
-        except (TypeError, ValueError) as exc:
+        except (TypeError, ValueError, OverflowError) as exc:
             if isinstance(exc, ConfigError):
                 raise
-            raise ConfigError(path, f"invalid value {value!r} ({exc})") from exc
-    return cfg
+            raise ConfigError(path, f"invalid value ({type(exc).__name__}: {exc})") from None
+    # the command line's checks: types, seeds, bounds
+    return check_config(cfg)
 
 
 def depth_image(depth: np.ndarray) -> np.ndarray:
@@ -162,6 +164,7 @@ class GraspAssembleEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self._seed = 0
         self._peg: PegConfig = cfg.cell.peg
         self.heightmap: Heightmap | None = None
+        self._done = False  # whether the episode of the last reset has ended
         self._renderer: Any = None
         self._renderer_key: tuple[float, float] | None = None
 
@@ -185,7 +188,34 @@ class GraspAssembleEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
                                   float(self.np_random.uniform(-1.0, 1.0)))
         self.heightmap = self.runner.observe(self._seed, self._peg)
         self._trace, self._frames = None, None
+        self._done = False
         return self._obs(self.heightmap), self._info(self.heightmap)
+
+    def _check_action(self, action: Any) -> tuple[int, int, int]:
+        """``(rotation, row, col)`` of an action: three integers (a NumPy integer array or a
+        sequence of ints; no bools, no fractions) inside the action space.
+
+        Raises:
+            ConfigError: ``action``, saying what is wrong.
+        """
+        if isinstance(action, (list, tuple)) and any(
+                isinstance(a, (bool, np.bool_)) or not isinstance(a, (int, np.integer))
+                for a in action):
+            raise ConfigError("action", f"must hold integers, got {action!r}")
+        try:
+            values = np.asarray(action)
+        except (TypeError, ValueError) as exc:
+            raise ConfigError("action", f"is not an array of three integers ({exc})") from None
+        if values.shape != (3,):
+            raise ConfigError("action", f"must have shape (3,) (rotation, row, col), got shape "
+                                        f"{values.shape}")
+        if values.dtype == np.bool_ or not np.issubdtype(values.dtype, np.integer):
+            raise ConfigError("action", f"must hold integers, got {values.dtype} "
+                                        f"{values.tolist()!r}")
+        k, row, col = (int(a) for a in values)
+        if not self.action_space.contains(np.array([k, row, col], dtype=np.int64)):
+            raise ConfigError("action", f"{(k, row, col)} is outside {self.action_space}")
+        return k, row, col
 
     def step(self, action: Any) -> tuple[dict[str, np.ndarray], float, bool, bool,
                                          dict[str, Any]]:
@@ -193,9 +223,10 @@ class GraspAssembleEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         hm = self.heightmap
         if hm is None:
             raise gym.error.ResetNeeded("call reset() before step()")
-        k, row, col = (int(a) for a in np.asarray(action).reshape(3))
-        if not self.action_space.contains(np.array([k, row, col], dtype=np.int64)):
-            raise ConfigError("action", f"{(k, row, col)} is outside {self.action_space}")
+        if self._done:
+            raise gym.error.ResetNeeded("the episode has ended (every step ends one); call "
+                                        "reset() before step()")
+        k, row, col = self._check_action(action)
         command = pixel_command(hm, row, col, action_angle(self.cfg.network, k, hm.depth))
         listing = self.render_mode == "rgb_array_list"  # record the states to draw them after
         record, robot, _ = self.runner.run(self._seed, lambda _hm: command, peg=self._peg,
@@ -208,6 +239,7 @@ class GraspAssembleEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         r_g, r_am = episode_reward(record.grasp_success, time_ok, self.threshold_s, self.mode,
                                    self.cfg.reward)
         self.episodes += 1
+        self._done = True
         # Undefined fields (NaN, e.g. no grasp offset without a grasp) are given as None.
         row_values = {key: (None if isinstance(v, float) and math.isnan(v) else v)
                       for key, v in record.to_row().items()}

@@ -4,7 +4,8 @@ parallel episodes (:class:`GraspTask`, the grasp already chosen) on the same wor
 (:class:`TrainingPool`), local processes or Ray actors.
 
 A worker (:class:`EpisodeWorker`, one per process or actor) keeps its cell and its policies; an
-exception in an episode becomes a failure row, and an episode whose worker process dies is
+exception in an episode stops the run (:class:`vgs.errors.EpisodeError`; diverged physics is an
+``unstable`` failure row), and an episode whose worker process dies is
 tried again alone up to :data:`MAX_ATTEMPTS` times before it becomes a ``worker_lost`` row.
 :mod:`vgs.experiments.evaluate` plans the episodes and writes the rows.
 """
@@ -13,6 +14,7 @@ from __future__ import annotations
 
 import math
 import multiprocessing as mp
+import os
 import signal
 import sys
 import time
@@ -27,12 +29,15 @@ import numpy as np
 from vgs.assembly.episode import EpisodeRunner, GraspCommand
 from vgs.assembly.record import EpisodeRecord
 from vgs.config import ExperimentConfig, PegConfig
-from vgs.errors import ConfigError, VGSError
+from vgs.errors import ConfigError, EpisodeError, SimulationError, VGSError
 from vgs.experiments.policies import EvalPolicy, is_run_dir, load_policy
 from vgs.runfolder import host
 
 MAX_ATTEMPTS = 3
 BACKENDS = ("local", "ray")
+# The longest a Ray worker may take for one episode before it counts as lost [s] (an episode of
+# the paper cell takes under a minute of wall time; Ray itself reports a dead actor sooner).
+RAY_WAIT_S = 900.0
 
 
 @dataclass(frozen=True)
@@ -94,7 +99,11 @@ class EpisodeWorker:
         return self.policies[spec]
 
     def run(self, task: EpisodeTask) -> dict[str, Any]:
-        """One episode as a table row; an exception becomes a failure row."""
+        """One episode as a table row; diverged physics is an ``unstable`` failure row.
+
+        Raises:
+            EpisodeError: On any other exception inside the episode (a bug is not a result).
+        """
         t0 = time.perf_counter()
         decision: dict[str, Any] = {}
         rng = np.random.default_rng([task.seed, 2])
@@ -109,9 +118,14 @@ class EpisodeWorker:
             record, _, _ = self.runner.run(task.seed, policy, peg=task.peg)
             if record.success and not math.isfinite(record.assembly_time):
                 record.success, record.failure_reason = False, "unstable"
-        except Exception as exc:  # noqa: BLE001 - any failure of one episode is a result row
+        except SimulationError:  # the physics diverged: a recorded failure
+            record = _failed_record(task, "unstable")
+        except Exception as exc:  # noqa: BLE001 - a bug is not a result: the run stops
             message = " ".join(str(exc).split())[:200]
-            record = _failed_record(task, f"error:{type(exc).__name__}: {message}")
+            raise EpisodeError(f"episode {task.index} (seed {task.seed}) raised "
+                               f"{type(exc).__name__}: {message}; the journal keeps the "
+                               "episodes finished before it: fix the cause and run the same "
+                               "command again") from None
         return task_row(task, record, decision, round(time.perf_counter() - t0, 3))
 
     def grasp(self, task: GraspTask) -> EpisodeRecord:
@@ -166,6 +180,15 @@ def _lost_row(task: EpisodeTask) -> dict[str, Any]:
     return task_row(task, _failed_record(task, "worker_lost"), {}, math.nan)
 
 
+def single_blas_thread() -> None:
+    """Give the worker processes spawned from now on one OpenBLAS thread (unless the user set
+    ``OPENBLAS_NUM_THREADS``). An episode's only large matrix product is the camera's; it
+    wakes OpenBLAS's helper thread, which then spins on the other core and competes with the
+    other worker (about 5 % of an episode's CPU, ``benchmarks/bench_cell.py``). The golden
+    records are identical either way (numpy's small products do not thread)."""
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+
 def _pool_round(cfg: ExperimentConfig, queue: list[EpisodeTask], workers: int
                 ) -> Generator[dict[str, Any], None, tuple[list[EpisodeTask], list[EpisodeTask]]]:
     """Run ``queue`` on a fresh pool, yielding rows as they finish, until done or broken.
@@ -174,10 +197,12 @@ def _pool_round(cfg: ExperimentConfig, queue: list[EpisodeTask], workers: int
         The episodes in flight when a worker died (suspects) and those not yet started.
     """
     ctx = mp.get_context("spawn")
+    single_blas_thread()
     queue = list(queue)
     futures: dict[Future[dict[str, Any]], EpisodeTask] = {}
-    with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init_process,
-                             initargs=(cfg,)) as pool:
+    pool = ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init_process,
+                               initargs=(cfg,))
+    try:
         while queue or futures:
             while queue and len(futures) < workers:
                 task = queue.pop(0)
@@ -190,7 +215,27 @@ def _pool_round(cfg: ExperimentConfig, queue: list[EpisodeTask], workers: int
                     return list(futures.values()), queue
                 futures.pop(fut)
                 yield row
+    except BaseException:  # an episode's error, Ctrl-C, SIGTERM: stop the workers now
+        stop_pool(pool)
+        raise
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
     return [], []
+
+
+def stop_pool(pool: ProcessPoolExecutor) -> None:
+    """Terminate a process pool's workers at once (their episodes are abandoned) and wait for
+    them, so that nothing is left running when the command ends."""
+    pool.shutdown(wait=False, cancel_futures=True)
+    processes = list((getattr(pool, "_processes", None) or {}).values())  # the stdlib's own
+    for proc in processes:
+        if proc.is_alive():
+            proc.terminate()
+    for proc in processes:
+        proc.join(timeout=5)
+        if proc.is_alive():
+            proc.kill()
+            proc.join(timeout=5)
 
 
 def run_local(cfg: ExperimentConfig, tasks: list[EpisodeTask],
@@ -270,7 +315,10 @@ def run_ray(cfg: ExperimentConfig, tasks: list[EpisodeTask], workers: int,
             while queue and idle:
                 actor, task = idle.pop(), queue.pop(0)
                 running[actor.run.remote(task)] = (actor, task)
-            done, _ = ray.wait(list(running), num_returns=1)
+            done, _ = ray.wait(list(running), num_returns=1, timeout=RAY_WAIT_S)
+            if not done:
+                raise VGSError(f"no Ray worker finished an episode in {RAY_WAIT_S:.0f} s (a "
+                               "worker or node is lost); run the same command again to resume")
             actor, task = running.pop(done[0])
             try:
                 yield ray.get(done[0])
@@ -318,6 +366,7 @@ class TrainingPool:
         self._next = 0
         self._pool: ProcessPoolExecutor | None = None
         if backend == "local":
+            single_blas_thread()
             self._pool = ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn"),
                                              initializer=_init_process, initargs=(cfg,))
         else:
@@ -346,7 +395,11 @@ class TrainingPool:
                 raise VGSError(f"a training worker process died ({exc}); start the run "
                                "again to resume from its checkpoint") from None
         try:
-            return self._ray.get(handle)
+            return self._ray.get(handle, timeout=RAY_WAIT_S)
+        except self._ray.exceptions.GetTimeoutError:
+            raise VGSError(f"a training worker returned no episode in {RAY_WAIT_S:.0f} s (a "
+                           "worker or node is lost); start the run again to resume from its "
+                           "checkpoint") from None
         except self._ray.exceptions.RayActorError as exc:
             raise VGSError(f"a training worker was lost ({type(exc).__name__}); start the run "
                            "again to resume from its checkpoint") from None
@@ -372,4 +425,6 @@ class TrainingPool:
         return self
 
     def __exit__(self, *exc: object) -> None:
+        if exc[0] is not None and self._pool is not None:  # an error or a signal: stop now
+            stop_pool(self._pool)
         self.close()

@@ -54,15 +54,17 @@ import pandas as pd
 from tqdm import tqdm
 
 from vgs.assembly.record import EpisodeRecord
+from vgs.checkpoint import atomic_write_text, open_append
 from vgs.columns import rounded, write_parquet
 from vgs.config import CONDITIONS, ExperimentConfig, PegConfig, to_dict
 from vgs.errors import ConfigError, CorruptFileError, RunMismatchError
 from vgs.experiments.episodepool import BACKENDS, EpisodeTask, run_local, run_ray, task_row
+from vgs.experiments.folderkind import claim
 from vgs.experiments.journal import encode_row, read_journal
-from vgs.experiments.policies import EvalPolicy, load_policy, policy_label
+from vgs.experiments.policies import EvalPolicy, load_policy, policy_digest, policy_label
 from vgs.experiments.stats import sample_std
 from vgs.runfolder import check_request, locked, provenance, read_json, write_json
-from vgs.validate import check_config, check_seed
+from vgs.validate import MAX_EPISODES, check_config, check_seed
 
 EVAL_STREAM = 0xE7A1  # tags the seed sequences of test episodes
 
@@ -87,8 +89,9 @@ class EvalSpec:
         if self.condition not in CONDITIONS:
             raise ConfigError("condition", f"must be one of {CONDITIONS}, got {self.condition!r}")
         if isinstance(self.episodes, bool) or not isinstance(self.episodes, int) \
-                or self.episodes < 1:
-            raise ConfigError("episodes", f"must be an integer >= 1, got {self.episodes!r}")
+                or not 1 <= self.episodes <= MAX_EPISODES:
+            raise ConfigError("episodes", f"must be an integer in [1, {MAX_EPISODES}], got "
+                                          f"{str(self.episodes)[:40]}")
         check_seed("seed", self.seed)
 
 
@@ -172,13 +175,17 @@ def _prepare(cfg: ExperimentConfig, spec: EvalSpec, out: Path,
     plan; return the rows already in the journal. Call with ``out`` locked."""
     meta = {"policy": policy_label(spec.policy), "policy_source": spec.policy,
             "policy_trained_episodes": getattr(policy, "trained_episodes", None),
+            "policy_digest": policy_digest(spec.policy, policy),
             "condition": spec.condition, "episodes": spec.episodes, "seed": spec.seed,
             "config": to_dict(cfg), "provenance": provenance()}
     meta_path = out / "meta.json"
     if meta_path.exists():
         old = read_json(meta_path)
-        # A training run that trained on since the rows were written is another policy.
-        keys = ["policy_source", "condition", "seed"]
+        # A policy is its weights (digest) and mode, not the path text: a folder recorded with
+        # a digest compares digests, one written before compares the source text; a training
+        # run that trained on since the rows were written is another policy.
+        keys = ["condition", "seed", "policy_digest" if "policy_digest" in old
+                else "policy_source"]
         if "policy_trained_episodes" in old:  # (not recorded before 2026-11-22)
             keys.append("policy_trained_episodes")
         for key in keys:
@@ -198,9 +205,7 @@ def _prepare(cfg: ExperimentConfig, spec: EvalSpec, out: Path,
     rows, cut = read_journal(journal, plan_episodes(cfg, spec))
     write_json(meta_path, meta)
     if cut:  # drop the line torn by a kill, so that appending starts on a new line
-        tmp = journal.with_name(f".{journal.name}.tmp")
-        tmp.write_text("".join(encode_row(rows[i]) for i in sorted(rows)))
-        os.replace(tmp, journal)
+        atomic_write_text(journal, "".join(encode_row(rows[i]) for i in sorted(rows)))
     return rows
 
 
@@ -269,6 +274,7 @@ def evaluate_many(cfg: ExperimentConfig, jobs: list[tuple[EvalSpec, Path]],
     for _, out in jobs:
         if out.exists() and not out.is_dir():
             raise ConfigError("out", f"{out} is a file, not a folder")
+        claim(out, "evaluation")
     # Fail here, not in every worker, on a bad spec or a refused checkpoint.
     policies = {spec.policy: load_policy(spec.policy, cfg) for spec, _ in jobs}
     with contextlib.ExitStack() as stack:
@@ -294,7 +300,7 @@ def _evaluate_locked(cfg: ExperimentConfig, jobs: list[tuple[EvalSpec, Path]],
             n = min(workers, len(tasks))
             source = (run_local(cfg, tasks, n) if backend == "local"
                       else run_ray(cfg, tasks, n, ray_address))
-            journals = [(out / "journal.jsonl").open("a") for _, out in jobs]
+            journals = [open_append(out / "journal.jsonl") for _, out in jobs]
             try:
                 finished = ok = 0
                 for row in source:

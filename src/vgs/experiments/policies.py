@@ -30,6 +30,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from vgs.assembly.episode import GraspCommand, center_policy
+from vgs.checkpoint import MAX_CHECKPOINT_BYTES, check_regular
 from vgs.config import ExperimentConfig, NetworkConfig, from_dict
 from vgs.errors import ConfigError, CorruptFileError
 from vgs.grasping.actions import peg_mask, perceived_jaw_angle, rotation_angle
@@ -132,6 +133,7 @@ def load_trained_agent(run_dir: Path, device: str = "cpu", field: str = "policy"
     from vgs.experiments.trainfolder import load_checkpoint
     from vgs.grasping.agent import GraspAgent
     from vgs.runfolder import read_json
+    from vgs.validate import check_config
 
     meta_path, ckpt = run_dir / "run.json", run_dir / "checkpoint.pt"
     weights = run_dir / POLICY_WEIGHTS
@@ -140,8 +142,8 @@ def load_trained_agent(run_dir: Path, device: str = "cpu", field: str = "policy"
                                  f"nor a policy folder (run.json and {POLICY_WEIGHTS})")
     meta = read_json(meta_path)
     try:
-        run_cfg = from_dict(ExperimentConfig, meta["config"])
-    except (KeyError, TypeError, ValueError) as exc:
+        run_cfg = check_config(from_dict(ExperimentConfig, meta["config"]))  # bounds included
+    except (KeyError, TypeError, ValueError) as exc:  # ConfigError is a ValueError
         raise CorruptFileError(meta_path, f"records no usable configuration ({exc})") from None
     agent = GraspAgent(run_cfg.network, run_cfg.agent, device=device, seed=run_cfg.seed)
     if ckpt.exists():
@@ -204,6 +206,7 @@ def _load_policy_files(folder: Path, meta: dict[str, Any], agent: Any, device: s
         if desc.get(key, "rotation" if key == "action" else None) != mine:
             raise CorruptFileError(desc_path, f"describes a network with {key} "
                                               f"{desc.get(key)!r}, run.json one with {mine!r}")
+    check_regular(weights_path, MAX_CHECKPOINT_BYTES)  # no symlink, device or FIFO; bounded
     try:
         state = torch.load(weights_path, map_location=device, weights_only=True)
     except (pickle.UnpicklingError, RuntimeError, EOFError, ValueError, TypeError,
@@ -271,14 +274,46 @@ def load_policy(spec: str, cfg: ExperimentConfig, device: str = "cpu") -> EvalPo
         return GreedyPolicy(Path(spec), device)
     if ":" in spec and not Path(spec).exists():
         module_name, _, attr = spec.partition(":")
+        if not module_name.strip() or not attr.strip():
+            raise ConfigError("policy", f"{spec!r} names no module:function")
         try:
             factory: Callable[[ExperimentConfig], EvalPolicy] = getattr(
                 importlib.import_module(module_name), attr)
-        except (ImportError, AttributeError) as exc:
-            raise ConfigError("policy", f"cannot import {spec!r} ({exc})") from exc
-        return factory(cfg)
+        except Exception as exc:  # noqa: BLE001 - a user module can raise anything on import
+            raise ConfigError("policy", f"cannot import {spec!r} ({type(exc).__name__}: "
+                                        f"{' '.join(str(exc).split())[:160]})") from None
+        try:
+            policy = factory(cfg)
+        except Exception as exc:  # noqa: BLE001 - the user's factory failed
+            raise ConfigError("policy", f"{spec!r} raised {type(exc).__name__}: "
+                                        f"{' '.join(str(exc).split())[:160]}") from None
+        if not callable(policy):
+            raise ConfigError("policy", f"{spec!r} returned {type(policy).__name__}, not a "
+                                        "policy (a callable taking heightmap and generator)")
+        return policy
     raise ConfigError("policy", f"{spec!r} is neither {' nor '.join(HEURISTICS)}, a training "
                                 "run or policy folder (with run.json) nor module:function")
+
+
+def policy_digest(spec: str, policy: EvalPolicy) -> str:
+    """What identifies a policy in an evaluation's ``meta.json``: for a training run or policy
+    folder the SHA-256 of its evaluation network's weights (every tensor's name, type, shape
+    and bytes) with its mode, so that another network under the same path text is another
+    policy; for ``center`` and ``random`` their name; for ``module:function`` the spec.
+    """
+    agent = getattr(policy, "agent", None)
+    if agent is None:
+        return f"spec:{spec}"
+    import hashlib
+
+    import torch
+
+    h = hashlib.sha256(f"{getattr(policy, 'label', '')}\n".encode())
+    for name, tensor in sorted(agent.eva_net.state_dict().items()):
+        t = tensor.detach().cpu().contiguous()
+        h.update(f"{name} {t.dtype} {tuple(t.shape)}\n".encode())
+        h.update(t.flatten().view(torch.uint8).numpy().tobytes())
+    return f"sha256:{h.hexdigest()}"
 
 
 def policy_label(spec: str) -> str:

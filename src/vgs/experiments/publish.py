@@ -7,6 +7,7 @@ import shutil
 import warnings
 from pathlib import Path
 
+from vgs.checkpoint import MAX_JOURNAL_BYTES, atomic_write_bytes, read_regular
 from vgs.errors import ConfigError
 from vgs.experiments.layout import holds_network, train_folders
 from vgs.runfolder import read_json
@@ -41,11 +42,13 @@ def publish(out: Path, dest: Path) -> list[Path]:
     copied = []
     for pattern in PUBLISHED:
         for src in sorted(out.glob(pattern)):
-            if src.is_file():
-                target = dest / src.relative_to(out)
-                target.parent.mkdir(parents=True, exist_ok=True)
-                shutil.copy2(src, target)
-                copied.append(target)
+            if src.is_symlink() or not src.is_file():  # a link's contents are not results
+                continue
+            target = dest / src.relative_to(out)
+            target.parent.mkdir(parents=True, exist_ok=True)
+            atomic_write_bytes(target, read_regular(src, MAX_JOURNAL_BYTES))
+            shutil.copystat(src, target)
+            copied.append(target)
     finished = [run for run in train_folders(out)
                 if holds_network(run) and (run / "convergence.json").exists()]
     if finished:

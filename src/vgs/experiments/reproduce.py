@@ -41,6 +41,7 @@ import pandas as pd
 from vgs.config import ExperimentConfig, to_dict
 from vgs.errors import ConfigError, CorruptFileError
 from vgs.experiments.evaluate import EvalSpec, evaluate_many, summarize, write_tables
+from vgs.experiments.folderkind import claim
 from vgs.experiments.layout import eval_jobs, train_runs
 from vgs.experiments.report import build_report
 from vgs.experiments.train import train
@@ -99,6 +100,7 @@ class Reproduction:
             raise ConfigError("workers", f"must be an integer >= 1, got {self.workers!r}")
         if out.exists() and not out.is_dir():
             raise ConfigError("out", f"{out} is a file, not a folder")
+        claim(out, "reproduction")
         self.backend = backend
         self.ray_address = ray_address
         self.progress = progress

@@ -16,6 +16,7 @@ mean wall time of one episode in one worker, so N workers finish about N episode
 from __future__ import annotations
 
 import csv
+import io
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -113,8 +114,9 @@ def train_progress(folder: Path, name: str | None = None) -> Progress:
     rows: list[dict[str, str]] = []
     if table.exists():
         try:
-            with table.open(newline="", encoding="utf-8") as fh:
-                rows = [r for r in csv.DictReader(fh) if r.get("wall_s") is not None]
+            text = checkpoint.read_regular(table, checkpoint.MAX_JOURNAL_BYTES).decode("utf-8")
+            rows = [r for r in csv.DictReader(io.StringIO(text, newline=""))
+                    if r.get("wall_s") is not None]
         except (UnicodeDecodeError, csv.Error) as exc:
             raise CorruptFileError(table, f"cannot be read ({exc})") from None
     ckpt = folder / "checkpoint.pt"

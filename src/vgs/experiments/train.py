@@ -61,9 +61,11 @@ from tqdm import tqdm
 
 from vgs.assembly.episode import EpisodeRunner, GraspCommand
 from vgs.assembly.record import EpisodeRecord
+from vgs.checkpoint import MAX_JOURNAL_BYTES, read_regular
 from vgs.config import ExperimentConfig
 from vgs.errors import CheckpointError, ConfigError, CorruptFileError
 from vgs.experiments.episodepool import BACKENDS, GraspTask, TrainingPool
+from vgs.experiments.folderkind import claim
 from vgs.experiments.policies import finished_as_policy, pixel_command
 from vgs.experiments.trainfolder import (
     RECORD_COLUMNS,
@@ -147,6 +149,7 @@ def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
     device = resolve_device(cfg.train.device)
     if out.exists() and not out.is_dir():
         raise ConfigError("out", f"{out} is a file, not a folder")
+    claim(out, "training run")
     with locked(out):
         return _train(cfg, mode, out, device, progress, threads, position, backend,
                       ray_address)
@@ -220,7 +223,8 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
             state.episode = episode + 1
             if state.episode % cfg.train.checkpoint_every == 0 or state.episode == total:
                 state.rng_state = rng.bit_generator.state
-                state.table_sha256 = _sha256((out / "episodes.csv").read_bytes())
+                state.table_sha256 = _sha256(read_regular(out / "episodes.csv",
+                                                              MAX_JOURNAL_BYTES))
                 save_checkpoint(ckpt, agent, replay, state, monitor)
                 if not progress:  # a line per checkpoint for logs of unattended runs
                     log.checkpoint_line(state.episode)

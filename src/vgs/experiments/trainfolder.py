@@ -74,7 +74,7 @@ def read_rows(path: Path, cfg: ExperimentConfig, mode: str, keep: int,
             raise CorruptFileError(path, f"is missing but the checkpoint is at episode {keep}; "
                                          "restore it or train again into a new folder")
         return [header]
-    data = path.read_bytes()
+    data = checkpoint.read_regular(path, checkpoint.MAX_JOURNAL_BYTES)  # no symlink, FIFO
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -121,11 +121,8 @@ def _sha256(data: bytes) -> str:
 
 def _open_csv(path: Path, lines: list[str]) -> Any:
     """Append-only per-episode table, rewritten (atomically) with the checked ``lines`` first."""
-    tmp = path.with_name(f".{path.name}.tmp")
-    with tmp.open("w", newline="", encoding="utf-8") as f:
-        f.write("".join(lines))
-    os.replace(tmp, path)
-    f = path.open("a", newline="", encoding="utf-8")
+    checkpoint.atomic_write_text(path, "".join(lines))
+    f = checkpoint.open_append(path)
     return f, csv.DictWriter(f, fieldnames=CSV_COLUMNS)
 
 
