@@ -9,6 +9,9 @@ OUT=${1:-runs/cell}
 VGS=.venv/bin/vgs
 $VGS sweep --offsets 9 --trials 50 --workers 2 --out "$OUT/sweep" --no-progress
 $VGS sweep --offsets-mm 0 --trials 200 --workers 2 --out "$OUT/com200" --no-progress
+# The whole graspable length (docs/results/cell_graspable; about 25 min on an idle host).
+$VGS sweep --offsets-mm=-48,-45,-40,-35,-26.25,-17.5,-8.75,0,8.75,17.5,26.25,35,40,45,48 \
+    --trials 50 --workers 2 --out "$OUT/graspable" --no-progress
 $VGS sweep --offsets 9 --trials 50 --workers 2 --mass-range 0.15 --length-range 0.15 \
     --out "$OUT/sweep_mass_length" --no-progress
 for condition in nominal mass length; do
@@ -17,4 +20,5 @@ for condition in nominal mass length; do
 done
 $VGS report "$OUT/paper_center" \
     --title "Centre heuristic at the paper's scale (vgs evaluate --profile paper --policy center)"
-echo "tables: .venv/bin/python benchmarks/sweep_tables.py $OUT/sweep (com200, sweep_mass_length)"
+echo "tables: benchmarks/sweep_tables.py at ac53c96 (git show ac53c96:benchmarks/sweep_tables.py)" \
+    "on $OUT/sweep (com200, sweep_mass_length)"

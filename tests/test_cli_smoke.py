@@ -84,7 +84,7 @@ def test_model_info(tmp_path: Path) -> None:
         (("demo", "--peg-mass", "-1"), "peg.mass"),
         (("demo", "--clearance", "0"), "hole.clearance"),
         (("demo", "--peg-diameter", "0.0315", "--clearance", "0.001"), "hole.clearance"),
-        (("demo", "--offset", "45"), "offset"),
+        (("demo", "--offset", "51"), "offset"),
         (("sweep", "--offsets-mm", "0,60", "--trials", "1"), "offsets"),
         (("sweep", "--profile", "nope"), "profile"),
         (("export-scene", "--set", "cell.hole.segments=4"), "hole.segments"),

@@ -59,11 +59,13 @@ class DemoResult:
 
 
 def check_offset(offset: float, peg: PegConfig) -> None:
-    """Raise :class:`ConfigError` (``offset``) unless both pads stay on the peg."""
-    limit = 0.5 * peg.length - PAD_HALF[0]
+    """Raise :class:`ConfigError` (``offset``) unless the pads' centre stays on the peg (as
+    :func:`vgs.experiments.sweep.check_spec`: past ``L/2 - PAD_HALF`` the pads overhang the
+    peg's end, which a policy's grasp can do too)."""
+    limit = 0.5 * peg.length
     if not (math.isfinite(offset) and abs(offset) <= limit + 1e-12):
-        raise ConfigError("offset", f"{offset * 1000:g} mm is off the peg: the pads stay on it "
-                                    f"for |offset| <= {limit * 1000:.1f} mm")
+        raise ConfigError("offset", f"{offset * 1000:g} mm is off the peg: the pads' centre "
+                                    f"stays on it for |offset| <= {limit * 1000:.1f} mm")
 
 
 def run_demo(cfg: ExperimentConfig, seed: int, offset: float = 0.0, policy: str | None = None,
