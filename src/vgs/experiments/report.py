@@ -261,6 +261,11 @@ def build_report(out: Path, title: str | None = None) -> Path:
                                              if meta.get("profile") else "")
     doc = Doc(out)
     doc.h(1, title)
+    tested = [provenance_text(read_json(m).get("provenance"))
+              for m in sorted((out / "eval").glob("**/meta.json"))]
+    tested_text = "Test episodes made with " + "; ".join(dict.fromkeys(t for t in tested if t))
+    if any(tested) and not meta:
+        doc.p(tested_text + ".")
     if meta:
         doc.p(f"Profile `{meta.get('profile')}`, command `{meta.get('command')}`, on "
               f"{meta.get('machine', '?')}; git {str(meta.get('git_revision', '?'))[:10]}; "
@@ -268,11 +273,8 @@ def build_report(out: Path, title: str | None = None) -> Path:
         made = provenance_text(meta.get("provenance"))
         if made:
             doc.p(f"Made with {made}.")
-    tested = [provenance_text(read_json(m).get("provenance"))
-              for m in sorted((out / "eval").glob("**/meta.json"))]
-    tested = list(dict.fromkeys(t for t in tested if t))
-    if tested:
-        doc.p("Test episodes made with " + "; ".join(tested) + ".")
+        if any(tested):
+            doc.p(tested_text + ".")
         stages = meta.get("stage_wall_s", {})
         if stages:
             doc.p("Wall time per stage: " + ", ".join(
