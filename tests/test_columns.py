@@ -198,7 +198,7 @@ def test_every_table_and_json_file_a_reproduction_writes(quick_reproduction: Any
     documents = files("*.json")
     names = sorted({p.name for p in documents})
     assert names == ["convergence.json", "meta.json", "policy.json", "reproduce.json",
-                     "run.json", "summary.json", "threshold.json"], names
+                     "run.json", "summary.json", "sweep.json", "threshold.json"], names
     for path in documents:
         strict_loads(path.read_text())
     checkpoints = files("checkpoint.pt")

@@ -20,6 +20,7 @@ from vgs.experiments.sweep import (
     paired_analysis,
     plan,
     read_journal,
+    read_sweep_journal,
     run_sweep,
     summarize,
 )
@@ -146,6 +147,9 @@ def test_sweep_journal_resumes_and_refuses_another_sweep(tmp_path) -> None:
     with pytest.raises(VGSError, match="crc32"):
         read_journal(journal, trials)
     assert list(read_journal(journal, trials, any_legacy=True)) == [1]
+    journal.write_text(encode_row(row).rstrip("\n"))  # killed between the row and its newline
+    rows, lines = read_sweep_journal(journal, trials)
+    assert list(rows) == [1] and lines.unterminated and not lines.cut
     journal.write_text(encode_row(row) * 2)
     with pytest.raises(VGSError, match="repeats trial 1"):
         read_journal(journal, trials)
@@ -171,3 +175,17 @@ def test_results_do_not_depend_on_the_worker_count() -> None:
     assert list(one[0]) == list(COLUMNS)
     assert [r["seed"] for r in one] == [t.seed for t in plan(spec, cfg.cell.peg)]
     assert repr(one) == repr(two)
+
+
+def test_every_published_journal_reads_under_the_integrity_rule() -> None:
+    """Each journal committed under docs/results carries a checksum on every row, or is one of
+    the journals published before the rule (vgs.experiments.journal.PUBLISHED, by SHA-256)."""
+    from pathlib import Path
+
+    from vgs.experiments.journal import read_lines
+
+    root = Path(__file__).resolve().parents[1] / "docs" / "results"
+    journals = sorted(root.rglob("journal.jsonl"))
+    assert journals
+    for path in journals:
+        assert read_lines(path).rows, path  # refused (CorruptFileError) otherwise

@@ -359,7 +359,7 @@ def check_paths(args: argparse.Namespace) -> None:
                 raise UsageError(f"{flag}: holds a NUL character")
 
 
-RESUMABLE = ("train", "evaluate", "reproduce")
+RESUMABLE = ("train", "evaluate", "reproduce", "sweep")
 
 
 def _error(message: str) -> int:

@@ -43,6 +43,7 @@ PUBLISHED = frozenset({
     "fca480ff94e77da4dc8c226dd69d0d49a0c1d836a3807adb16fe3235d1d2553c",  # cell_stiction/com200
     "388ff13764f88fe2703a2ee32818364162d67281396d313ba1c7c57d976b41fd",  # cell_stiction/sweep
     "1752901138ac37852aaf2503f72baf9654f51cfb5c18c7fc62ad1a7269d204f1",  # .../sweep_mass_length
+    "32ca2e6c020a1b83fb851b1110064be113ff6dd6fae59d8a95f7425d826b1ab9",  # cell_graspable
 })
 
 
@@ -53,6 +54,8 @@ class Lines:
     Attributes:
         rows: ``(line number, row)`` in file order, each row's checksum checked and removed.
         cut: Whether a last line cut short by a kill was dropped.
+        unterminated: Whether the last row lacks its newline (a kill between the row and its
+            newline): the row is kept, and a writer must end the line before appending.
         legacy: ``{"lines": n, "sha256": digest}`` of the leading rows without a checksum, or
             None when every row has one.
     """
@@ -60,6 +63,7 @@ class Lines:
     rows: list[tuple[int, dict[str, Any]]] = field(default_factory=list)
     cut: bool = False
     legacy: dict[str, Any] | None = None
+    unterminated: bool = False
 
 
 def read_lines(path: Path, legacy: Collection[str] = PUBLISHED,
@@ -109,6 +113,7 @@ def read_lines(path: Path, legacy: Collection[str] = PUBLISHED,
         else:
             unchecked = number
         out.rows.append((number, row))
+        out.unterminated = last
     if unchecked:
         digest = hashlib.sha256(b"".join(line + b"\n" for line in lines[:unchecked])).hexdigest()
         if not any_legacy and digest not in legacy:
@@ -135,7 +140,8 @@ def read_journal(path: Path, plan: Sequence[Any] | None = None
                  ) -> tuple[dict[int, dict[str, Any]], bool]:
     """The rows of a ``journal.jsonl`` by episode index, checked and in the column vocabulary
     (:func:`vgs.columns.normalize_row`: legacy names renamed, ``null`` floats as NaN); and
-    whether a cut last line was dropped.
+    whether the journal must be written again before appending (a cut last line was dropped,
+    or the last row lacks its newline).
 
     Args:
         path: The journal.
@@ -165,7 +171,7 @@ def read_journal(path: Path, plan: Sequence[Any] | None = None
             _check_row(path, number, row, plan)
         first[i] = number
         rows[i] = row
-    return rows, found.cut
+    return rows, found.cut or found.unterminated
 
 
 def _check_row(path: Path, number: int, row: dict[str, Any], plan: Sequence[Any]) -> None:

@@ -405,7 +405,7 @@ def _prepare(cfg: ExperimentConfig, spec: SweepSpec, out: Path) -> dict[int, dic
         legacy = lines.legacy
     write_json(meta_path, {"kind": "sweep", "spec": request, "config": to_dict(cfg),
                            "legacy_rows": legacy})
-    if lines.cut:  # drop the line torn by a kill (the others as written: their digests hold)
-        data = read_regular(journal, MAX_JOURNAL_BYTES)
-        atomic_write_bytes(journal, data[:data.rfind(b"\n") + 1])
+    if lines.cut or lines.unterminated:  # drop a torn line / end the last one (the others
+        data = read_regular(journal, MAX_JOURNAL_BYTES)  # as written: their digests hold)
+        atomic_write_bytes(journal, data[:data.rfind(b"\n") + 1] if lines.cut else data + b"\n")
     return rows
