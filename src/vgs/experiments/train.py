@@ -62,6 +62,7 @@ from tqdm import tqdm
 from vgs.assembly.episode import EpisodeRunner, GraspCommand
 from vgs.assembly.record import EpisodeRecord
 from vgs.checkpoint import MAX_JOURNAL_BYTES, read_regular
+from vgs.columns import rounded_rows
 from vgs.config import ExperimentConfig
 from vgs.errors import CheckpointError, ConfigError, CorruptFileError
 from vgs.experiments.episodepool import BACKENDS, GraspTask, TrainingPool
@@ -372,7 +373,7 @@ class _TrainLog:
                 reward: float, r_asm: float, stats: dict[str, float], monitor: DeltaQMonitor,
                 wall: float) -> None:
         episode = row["episode"]
-        self.table.writerow(row)
+        self.table.writerow(rounded_rows([row])[0])  # times to the ms
         self.csv_file.flush()
         writer = self.writer
         writer.add_scalar("charts/grasp_success", int(record.grasp_success), episode)
