@@ -364,3 +364,21 @@ def test_published_results_load_and_their_reports_rebuild(
     assert "| nominal |" in report and "All test episodes ran on one host" in report
     assert main(["status", str(out)]) == 0
     assert "report:" in capsys.readouterr().out
+
+
+def test_publish_copies_regular_files_never_a_links_target(tmp_path: Path) -> None:
+    """``vgs report --publish`` copies the results, not what a symlink in the folder points to
+    (issue 41)."""
+    from vgs.experiments.publish import publish
+
+    out, dest = tmp_path / "repro", tmp_path / "pub"
+    (out / "sweep").mkdir(parents=True)
+    (out / "report.md").write_text("# report\n")
+    (out / "sweep" / "sweep.csv").write_text("offset_mm\n0.0\n")
+    secret = tmp_path / "secret.txt"
+    secret.write_text("not a result")
+    (out / "sweep" / "summary.json").symlink_to(secret)
+    copied = publish(out, dest)
+    assert sorted(p.relative_to(dest).as_posix() for p in copied) == ["report.md",
+                                                                       "sweep/sweep.csv"]
+    assert not (dest / "sweep" / "summary.json").exists()
