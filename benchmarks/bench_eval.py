@@ -229,6 +229,8 @@ def main() -> None:
     parser.add_argument("--quick-dir", type=Path,
                         help="a finished quick reproduction to read stage times from")
     parser.add_argument("--no-ray", action="store_true", help="skip the Ray measurement")
+    parser.add_argument("--probe-steps", type=int, default=60_000,
+                        help="physics steps of the machine probe per process")
     parser.add_argument("--light-episodes", type=int, default=8,
                         help="episodes per measured part of the paper-light projection (0: skip)")
     parser.add_argument("--light-dir", type=Path,
@@ -249,7 +251,7 @@ def main() -> None:
     print(f"  per-episode time with 2 workers / with 1: {s2 / s1:.2f} "
           "(1.00 = no slowdown from sharing the machine)")
     print(f"  machine probe, MuJoCo alone in 2 processes at once / in 1: "
-          f"{machine_contention():.2f}")
+          f"{machine_contention(args.probe_steps):.2f}")
     if not args.no_ray:
         try:
             wr, _ = throughput(args.episodes, 2, "ray")

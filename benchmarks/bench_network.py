@@ -1,18 +1,19 @@
 """Time one grasp decision and one training step of the grasp Q network.
 
 A *decision* is :meth:`GraspAgent.act` with epsilon = 0 on a size x size heightmap: preprocessing,
-one batched eval-mode forward pass of all R rotations under ``torch.inference_mode`` and the
-masked argmax. A *training step* is :meth:`GraspAgent.update` on a terminal transition
-(y = r): a train-mode forward pass of the executed rotation and its opposite, the Huber loss at
-the executed pixel, backward and one SGD step. Each is timed ``--repeats`` times after
-``--warmup`` untimed calls; the median wall-clock time is printed, with the median process CPU
-time (all threads) beside it, and the load average before and after (on a shared machine other
+one batched eval-mode forward pass of all R rotations (one map for the position action) under
+``torch.inference_mode`` and the masked argmax. A *training step* is :meth:`GraspAgent.update` on a
+terminal transition (y = r): a train-mode forward pass of the executed rotation and its opposite,
+the Huber loss at the executed pixel, backward and one SGD step. Each is timed ``--repeats`` times
+after ``--warmup`` untimed calls; the median wall-clock time is printed, with the median process
+CPU time (all threads) beside it, and the load average before and after (on a shared machine other
 processes inflate the wall-clock times).
 
 Usage::
 
     python benchmarks/bench_network.py [--backbones densenet121 light] [--rotations 16]
-        [--device cpu|cuda] [--rotate input features] [--memory-format contiguous channels_last]
+        [--action rotation|position] [--device cpu|cuda] [--rotate input features]
+        [--memory-format contiguous channels_last]
         [--precision float32 bfloat16] [--threads N] [--size 224] [--repeats 3] [--warmup 1]
         [--json PATH]
 """
@@ -32,7 +33,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from vgs.config import BACKBONES, PRECISIONS, AgentConfig, NetworkConfig
+from vgs.config import ACTIONS, BACKBONES, PRECISIONS, AgentConfig, NetworkConfig
 from vgs.grasping.agent import GraspAgent
 from vgs.grasping.network import ROTATE_MODES
 from vgs.grasping.replay import Transition
@@ -88,10 +89,12 @@ def bench_one(
     repeats: int,
     warmup: int,
     precision: str = "float32",
+    action: str = "rotation",
 ) -> dict[str, Any]:
     """Decision and training-step times of one configuration [s]."""
     agent = GraspAgent(
-        NetworkConfig(backbone=backbone, num_rotations=rotations, precision=precision),
+        NetworkConfig(action=action, backbone=backbone, num_rotations=rotations,
+                      precision=precision),
         AgentConfig(),
         device=device,
         rotate=rotate,
@@ -103,10 +106,12 @@ def bench_one(
     decide, decide_cpu = _time(lambda: agent.act(color, depth, 0.0, mask, rng), repeats, warmup,
                                dev)
     row, col = (int(v) for v in np.argwhere(mask)[0])
-    transition = Transition(color, depth, (1, row, col), 1.0)
+    k = min(1, agent.network_cfg.q_maps - 1)  # a rotation with an opposite one where R > 1
+    transition = Transition(color, depth, (k, row, col), 1.0)
     train, train_cpu = _time(lambda: agent.update(transition), repeats, warmup, dev)
     return {
         "backbone": backbone,
+        "action": action,
         "rotate": rotate,
         "memory_format": memory_format,
         "precision": precision,
@@ -129,6 +134,9 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--backbones", nargs="+", choices=BACKBONES, default=list(BACKBONES))
     parser.add_argument("--rotations", type=int, default=16)
+    parser.add_argument("--action", choices=ACTIONS, default="rotation",
+                        help="network.action (default: rotation, whose R maps the figures of "
+                             "docs/grasping.md time); rotate modes it does not take are skipped")
     parser.add_argument("--device", choices=("cpu", "cuda"), default="cpu")
     parser.add_argument("--rotate", nargs="+", choices=ROTATE_MODES, default=list(ROTATE_MODES))
     parser.add_argument("--memory-format", nargs="+", choices=MEMORY_FORMATS,
@@ -148,7 +156,8 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
         parser.error("--device cuda: no CUDA device available")
     print(f"torch {torch.__version__}, {platform.processor() or platform.machine()}, "
           f"device {args.device}, threads {torch.get_num_threads()}, "
-          f"heightmap {args.size}x{args.size}, R = {args.rotations}, median of {args.repeats} "
+          f"heightmap {args.size}x{args.size}, {args.action} action, R = {args.rotations}, "
+          f"median of {args.repeats} "
           f"after {args.warmup} warm-up")
     print(f"load average before: {_load()}")
     header = (f"{'backbone':<12} {'rotate':<9} {'memory':<14} {'precision':<9} {'threads':>7} "
@@ -158,10 +167,14 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     results = []
     for backbone in args.backbones:
         for rotate in args.rotate:
+            if rotate not in (("input", "none") if args.action == "position"
+                              else ("input", "features")):
+                continue
             for memory_format in args.memory_format:
                 for precision in args.precision:
                     r = bench_one(backbone, rotate, memory_format, args.rotations, args.size,
-                                  args.device, args.repeats, args.warmup, precision)
+                                  args.device, args.repeats, args.warmup, precision,
+                                  args.action)
                     results.append(r)
                     print(f"{backbone:<12} {rotate:<9} {memory_format:<14} {precision:<9} "
                           f"{r['threads']:>7} {r['decision_s']:>13.3f} "

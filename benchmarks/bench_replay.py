@@ -114,7 +114,9 @@ def main() -> None:
     parser.add_argument("--threads", type=int, default=2)
     args = parser.parse_args()
     torch.set_num_threads(args.threads)
-    cfg = override(profile("paper"), "network.backbone", "light")
+    # The rotation action (R = 16), whose actions (k, i, j) the transitions below carry.
+    cfg = override(override(profile("paper"), "network.backbone", "light"), "network.action",
+                   "rotation")
     runner = EpisodeRunner(cfg)
     render = scene_renderer(runner)
     scenes = [episode_seed(0, e) for e in range(args.scenes)]
@@ -139,7 +141,7 @@ def main() -> None:
         t = Transition(*maps[s], (0, 0, 0), 0.0, scene=s)
         for buf in (maps_buf, scene_buf, cached):
             buf.add(t, 0.1)
-    slots = list(range(DEFAULT_CACHE))
+    slots = list(range(min(DEFAULT_CACHE, len(scenes))))
     print(f"one get: maps {get_seconds(maps_buf, slots) * 1000:.2f} ms, scenes on a cache hit "
           f"{get_seconds(cached, slots) * 1000:.2f} ms, on a miss (render) "
           f"{get_seconds(scene_buf, slots) * 1000:.1f} ms")

@@ -1,8 +1,8 @@
 """Training's parallel episodes, locally and on Ray, and the projected wall time of the
 ``paper`` protocol with DenseNet-121 here and per added 16-core node (issue 18, item 3).
 
-Run: ``.venv/bin/python benchmarks/bench_train.py [--episodes 3] [--no-ray]`` (about 2-3 min on
-2 cores).
+Run: ``.venv/bin/python benchmarks/bench_train.py [--episodes 3] [--no-ray] [--backbone B]``
+(about 2-3 min on 2 cores).
 
 Prints, all measured on this machine with the ``paper`` profile's cell:
 
@@ -10,8 +10,9 @@ Prints, all measured on this machine with the ``paper`` profile's cell:
   exploration grasp (a random pixel on the peg, as in the first ``agent.random_episodes``) and a
   centre grasp (a grasp that holds, so the assembly runs: the cost of a greedy episode once the
   policy grasps well, and of a test episode);
-* the learner's share of one episode: rendering the heightmap, one greedy decision (R = 16,
-  224 x 224) and one update with its replay, DenseNet-121 on one CPU thread;
+* the learner's share of one episode: rendering the heightmap, one greedy decision (the
+  profile's network, 224 x 224) and one update with its replay, DenseNet-121 (``--backbone``)
+  on one CPU thread;
 * the wall time of the training pool (``train.parallel_episodes`` = 2) on a batch of centre
   grasps, local processes and Ray actors (start-up excluded);
 * the projection of the ``paper`` protocol: 2 policies x 5000 training episodes (1000 random)
@@ -47,7 +48,7 @@ import numpy as np
 
 from bench_eval import network_step_seconds  # this folder (the script's) is on sys.path
 from vgs.assembly.episode import EpisodeRunner, center_policy
-from vgs.config import profile
+from vgs.config import BACKBONES, override, profile
 from vgs.experiments.episodepool import EpisodeWorker, GraspTask, TrainingPool
 from vgs.experiments.policies import pixel_command
 from vgs.experiments.trainfolder import episode_seed
@@ -94,9 +95,11 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=3,
                         help="episodes per simulation measurement (default: %(default)s)")
     parser.add_argument("--no-ray", action="store_true", help="skip the Ray pool measurement")
+    parser.add_argument("--backbone", choices=BACKBONES, default="densenet121",
+                        help="the learner's backbone (default: %(default)s, the paper's)")
     args = parser.parse_args()
     cores = os.cpu_count() or 1
-    cfg = profile("paper")
+    cfg = override(profile("paper"), "network.backbone", args.backbone)
     print(f"machine: {cores} CPU cores; load average before: {os.getloadavg()[0]:.2f}")
 
     runner = EpisodeRunner(cfg)
@@ -115,8 +118,9 @@ def main() -> None:
     print(f"simulation of one training episode (one process): exploration grasp "
           f"{sim_explore:.2f} s, centre grasp {sim_centre:.2f} s; heightmap {observe:.2f} s")
 
-    update1, decide1 = network_step_seconds("densenet121", 1)
-    print(f"DenseNet-121 (R = {rotations}, 224 px, 1 thread): update with replay "
+    update1, decide1 = network_step_seconds(cfg.network, 1)
+    print(f"{args.backbone} ({cfg.network.action} action, {cfg.network.q_maps} Q map(s), 224 px, "
+          f"1 thread): update with replay "
           f"{update1:.2f} s, decision {decide1:.2f} s")
 
     if not args.no_ray:
@@ -137,7 +141,7 @@ def main() -> None:
     n_train = 2 * tr
     n_test = cfg.eval.episodes * 3 * 2
     learner1 = observe + greedy * decide1 + update1
-    print(f"paper protocol, DenseNet-121: {n_train} training episodes (2 policies x {tr}, "
+    print(f"paper protocol, {args.backbone}: {n_train} training episodes (2 policies x {tr}, "
           f"{greedy:.0%} greedy), {n_test} test episodes (1000 x 3 conditions x 2 policies)")
     print(f"  per training episode: simulation {sim_train:.2f} s (exploration and centre "
           f"grasps weighted), learner {learner1:.2f} s (heightmap, {greedy:.0%} of a decision, "

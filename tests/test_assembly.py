@@ -1,8 +1,8 @@
 """The assembly module: the spiral's geometry and the search's depth rule (maths, no physics) and
 one whole assembly on the physics.
 
-The physics test runs one centre-grasp episode (scene 0 of ``diagnose_assembly.py``'s
-``--seed 7``, which assembles without a new search) and watches the peg's axis in the tool frame
+The physics test runs one centre-grasp episode (scene 0 of root seed 7, which assembles
+without a new search) and watches the peg's axis in the tool frame
 during the search: touch-downs do not rub, so the search tilt holds in the pads.
 """
 

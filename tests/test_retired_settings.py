@@ -11,6 +11,7 @@ import pytest
 from vgs.config import AgentConfig, profile, same_config, to_dict, without_retired
 from vgs.errors import RunMismatchError
 from vgs.runfolder import check_request
+from vgs.validate import BOUNDS
 
 
 def _recorded_before() -> dict:
@@ -36,3 +37,12 @@ def test_other_unknown_fields_are_still_refused(tmp_path: Path) -> None:
     saved["agent"]["no_such_setting"] = 1
     with pytest.raises(RunMismatchError, match="agent.no_such_setting"):
         check_request(saved, profile("smoke"), tmp_path / "run.json")
+
+
+def test_every_bound_names_a_field() -> None:
+    cfg = profile("paper")
+    for path in BOUNDS:
+        value = cfg
+        for name in path.split("."):
+            assert hasattr(value, name), path
+            value = getattr(value, name)

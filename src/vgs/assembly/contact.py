@@ -314,7 +314,7 @@ class ContactPhases:
         # peg, also where it leans across the pinch axis, which the wiggle does not turn: a
         # grasp whose jaws lay phi off the peg's axis holds it so (the pads lock that angle in).
         # With the stiffness of the other phases the lean stayed above delta and the insertion
-        # jammed from phi = 5 deg (benchmarks/probe_jaw_misalignment.py, docs/training.md).
+        # jammed from phi = 5 deg (docs/training.md, "The jaw angle").
         self._comply(cfg.insert_stiffness, k_rot=0.0)
         z_target = self.z_contact - self.cfg.insertion_depth - 0.003
         last_z = robot.arm.tcp_pose()[0][2]

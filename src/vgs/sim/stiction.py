@@ -4,9 +4,9 @@ MuJoCo's friction is velocity-regularised: a contact that transmits a tangential
 little, all the time. MuJoCo's no-slip post-solver (``sim.noslip_iterations``) pins the pads
 while they are the peg's only contacts, but once the peg also presses on the table or a wall of
 the hole the peg creeps round in the pads under a third of the grasp's capacity (0.83 deg in
-5 s, ``python benchmarks/probe_grasp_creep.py``), and more no-slip iterations make a step load
-jump instead (docs/cell.md, "The grasp"). A rubber pad does not creep: it sticks until the load
-reaches the Coulomb limit and then slides.
+5 s, ``benchmarks/probe_grasp_creep.py`` at ``ac53c96``), and more no-slip iterations make a
+step load jump instead (docs/cell.md, "The grasp"). A rubber pad does not creep: it sticks
+until the load reaches the Coulomb limit and then slides.
 
 :class:`PadStiction` gives the pads that stick state, as a latch checked once per control tick:
 
