@@ -28,15 +28,13 @@ MAY_IMPORT: dict[str, set[str]] = {
     "render": {"errors", "config", "sim"},
     "assembly": {"errors", "columns", "config", "perception", "sim", "control"},
     "experiments": {"errors", "jsonsafe", "columns", "configdoc", "config", "perception",
-                    "validate",
-                    "checkpoint", "runfolder", "sim", "grasping", "control", "render",
-                    "assembly"},
+                    "validate", "checkpoint", "runfolder", "sim", "grasping", "control",
+                    "render", "assembly"},
     "envs": {"errors", "config", "validate", "perception", "sim", "grasping", "render",
              "assembly", "experiments"},
     "cli": {"errors", "jsonsafe", "columns", "configdoc", "config", "perception", "validate",
-            "checkpoint",
-            "runfolder", "sim", "grasping", "control", "render", "assembly", "experiments",
-            "vgs"},
+            "checkpoint", "runfolder", "sim", "grasping", "control", "render", "assembly",
+            "experiments", "vgs"},
     "vgs": {"envs"},  # the package's face: __version__ and the environment's registration
 }
 

@@ -85,9 +85,11 @@ def time_arrays(df: pd.DataFrame, column: str = "assembly_time_s"
 
 
 def gain_pct(tb: np.ndarray, ob: np.ndarray, tv: np.ndarray, ov: np.ndarray) -> float:
-    """``100 (T_base - T_vgs) / T_base`` on the mean times of the successes (NaN without any)."""
+    """``100 (T_base - T_vgs) / T_base`` on the mean times of the successes (NaN without any,
+    or when the baseline's mean is zero: a phase its successes never entered)."""
     mb, mv = _mean_success(tb, ob), _mean_success(tv, ov)
-    return 100.0 * (mb - mv) / mb if math.isfinite(mb) and math.isfinite(mv) else math.nan
+    return (100.0 * (mb - mv) / mb if math.isfinite(mb) and math.isfinite(mv) and mb > 0
+            else math.nan)
 
 
 def total_gain_pct(tb: np.ndarray, ob: np.ndarray, tv: np.ndarray, ov: np.ndarray) -> float:
