@@ -313,7 +313,9 @@ def seeds_markdown(table: pd.DataFrame, folders: list[Path], dest: Path, figure:
              "spread between runs; the t interval assumes the gains are normal. Gain in total "
              "time: the same on the summed assembly times of all tests, failed attempts included "
              "until given up (the paper's own measure; its tests all assembled); without "
-             "failed attempts: the summed times of the successes alone; alignment: the gain on "
+             "failed attempts: the summed times of the successes alone (it compares like with "
+             "like only where both policies assemble about as many tests: a policy that "
+             "assembles more sums more times); alignment: the gain on "
              "the mean alignment time of the successes, the phase the paper studies.", ""]
     for condition in dict.fromkeys(table["condition"]):
         part = table[table["condition"] == condition]
