@@ -143,7 +143,7 @@ def seed_arg(text: str) -> int:
     return value
 
 
-def _float_list_mm(text: str) -> tuple[float, ...]:
+def parse_offsets_mm(text: str) -> tuple[float, ...]:
     """Comma-separated millimetres -> metres."""
     try:
         values = tuple(float(v) / 1000.0 for v in text.split(",") if v.strip())
@@ -169,7 +169,7 @@ def headless_gl_default() -> None:
         os.environ["MUJOCO_GL"] = "egl"
 
 
-def _video_size(text: str) -> tuple[int, int]:
+def parse_video_size(text: str) -> tuple[int, int]:
     """``WxH`` -> (width, height) in pixels."""
     w, sep, h = text.lower().partition("x")
     try:

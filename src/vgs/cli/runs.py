@@ -8,11 +8,11 @@ import json
 from pathlib import Path
 
 from vgs.cli.options import (
-    _float_list_mm,
-    _video_size,
     check_video_name,
     flag_overrides,
     headless_gl_default,
+    parse_offsets_mm,
+    parse_video_size,
 )
 from vgs.config import ExperimentConfig
 from vgs.errors import ConfigError
@@ -22,7 +22,7 @@ from vgs.jsonsafe import dumps
 def cmd_demo(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     """One traced episode: phase table (or JSON record), DIR/demo.png and, with ``--video``, the
     episode rendered as a video."""
-    video_size = _video_size(args.video_size) if args.video else None
+    video_size = parse_video_size(args.video_size) if args.video else None
     if args.video:
         check_video_name(args.video)
         headless_gl_default()  # before anything imports mujoco
@@ -59,7 +59,7 @@ def cmd_sweep(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     from vgs.experiments.sweep import SweepSpec, default_offsets, sweep_to_folder
 
     if args.offsets_mm is not None:
-        offsets = _float_list_mm(args.offsets_mm)
+        offsets = parse_offsets_mm(args.offsets_mm)
     else:
         offsets = default_offsets(cfg.cell.peg, args.offsets, args.length_range)
     spec = SweepSpec(offsets=offsets, trials=args.trials, mass_range=args.mass_range,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from vgs.config.checks import _finite, _non_negative, _positive, shown
+from vgs.config.checks import check_non_negative, check_positive, is_finite, shown
 from vgs.errors import ConfigError
 
 
@@ -26,7 +26,7 @@ class PegConfig:
     friction: float = 0.4
 
     def __post_init__(self) -> None:
-        _positive(self, "diameter", "length", "mass", "friction", prefix="peg.")
+        check_positive(self, "diameter", "length", "mass", "friction", prefix="peg.")
         if self.length < 2 * 0.025:
             raise ConfigError("peg.length", "must be at least 50 mm so the RG2 pads fit on it")
 
@@ -65,9 +65,9 @@ class HoleConfig:
     peg_diameter: float = 0.030
 
     def __post_init__(self) -> None:
-        if not (_finite(self.clearance) and self.clearance > 0):
+        if not (is_finite(self.clearance) and self.clearance > 0):
             raise ConfigError("hole.clearance", f"must be > 0, got {shown(self.clearance)}")
-        _positive(self, "depth", "outer_radius", "friction", "peg_diameter", prefix="hole.")
+        check_positive(self, "depth", "outer_radius", "friction", "peg_diameter", prefix="hole.")
         if self.segments < 8:
             raise ConfigError("hole.segments", f"must be >= 8, got {self.segments}")
         if self.outer_radius <= self.diameter / 2 + 0.005:
@@ -122,8 +122,9 @@ class GripperConfig:
     def __post_init__(self) -> None:
         if not (3.0 <= self.force <= 40.0):
             raise ConfigError("gripper.force", f"the RG2 grips with 3-40 N, got {self.force!r}")
-        _positive(self, "stroke", "pad_friction", "closing_speed", prefix="gripper.")
-        _non_negative(self, "pad_torsional_friction", "pad_rolling_friction", prefix="gripper.")
+        check_positive(self, "stroke", "pad_friction", "closing_speed", prefix="gripper.")
+        check_non_negative(self, "pad_torsional_friction", "pad_rolling_friction",
+                           prefix="gripper.")
 
 
 @dataclass(frozen=True)
@@ -141,7 +142,7 @@ class FTSensorConfig:
     cutoff_hz: float = 30.0
 
     def __post_init__(self) -> None:
-        _non_negative(self, "force_noise", "torque_noise", "cutoff_hz", prefix="ft.")
+        check_non_negative(self, "force_noise", "torque_noise", "cutoff_hz", prefix="ft.")
 
 
 @dataclass(frozen=True)
@@ -165,8 +166,8 @@ class CameraConfig:
     def __post_init__(self) -> None:
         if self.size < 16:
             raise ConfigError("camera.size", f"must be >= 16 px, got {self.size}")
-        _positive(self, "pixel_size", "height", prefix="camera.")
-        _non_negative(self, "depth_noise", prefix="camera.")
+        check_positive(self, "pixel_size", "height", prefix="camera.")
+        check_non_negative(self, "depth_noise", prefix="camera.")
 
     @property
     def extent(self) -> float:
@@ -200,7 +201,7 @@ class SimConfig:
     noslip_iterations: int = 1
 
     def __post_init__(self) -> None:
-        _positive(self, "timestep", "contact_timeconst", "impratio", prefix="sim.")
+        check_positive(self, "timestep", "contact_timeconst", "impratio", prefix="sim.")
         if self.control_decimation < 1:
             raise ConfigError("sim.control_decimation", "must be >= 1")
         if self.contact_timeconst < 2 * self.timestep:

@@ -8,7 +8,7 @@ from typing import Any
 from vgs.errors import ConfigError
 
 
-def _finite(value: Any) -> bool:
+def is_finite(value: Any) -> bool:
     """Whether ``value`` is a number a float can hold (an int of 400 digits is not)."""
     return isinstance(value, (int, float)) and abs(value) <= 1e300 and math.isfinite(value)
 
@@ -19,21 +19,21 @@ def shown(value: Any) -> str:
     return text if len(text) <= 60 else f"{text[:40]}... ({len(text)} characters)"
 
 
-def _positive(obj: Any, *names: str, prefix: str = "") -> None:
+def check_positive(obj: Any, *names: str, prefix: str = "") -> None:
     for name in names:
         value = getattr(obj, name)
-        if not (_finite(value) and value > 0):
+        if not (is_finite(value) and value > 0):
             raise ConfigError(f"{prefix}{name}", f"must be a positive number, got {shown(value)}")
 
 
-def _non_negative(obj: Any, *names: str, prefix: str = "") -> None:
+def check_non_negative(obj: Any, *names: str, prefix: str = "") -> None:
     for name in names:
         value = getattr(obj, name)
-        if not (_finite(value) and value >= 0):
+        if not (is_finite(value) and value >= 0):
             raise ConfigError(f"{prefix}{name}", f"must be >= 0, got {shown(value)}")
 
 
-def _fraction(obj: Any, *names: str, prefix: str = "") -> None:
+def check_fraction(obj: Any, *names: str, prefix: str = "") -> None:
     for name in names:
         value = getattr(obj, name)
         if not (isinstance(value, (int, float)) and 0.0 <= value <= 1.0):

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from vgs.config.checks import _fraction, _non_negative, _positive
+from vgs.config.checks import check_fraction, check_non_negative, check_positive
 from vgs.errors import ConfigError
 
 
@@ -44,7 +44,7 @@ class ControllerConfig:
     max_angular_speed: float = 1.5
 
     def __post_init__(self) -> None:
-        _positive(
+        check_positive(
             self, "trans_stiffness", "rot_stiffness", "trans_mass", "rot_inertia",
             "damping_ratio", "force_damping", "max_speed", "max_angular_speed",
             prefix="controller.",
@@ -216,7 +216,7 @@ class AssemblyConfig:
     timeouts: tuple[tuple[str, float], ...] = _DEFAULT_TIMEOUTS
 
     def __post_init__(self) -> None:
-        _positive(
+        check_positive(
             self, "insertion_depth", "approach_height", "contact_force", "press_force",
             "spiral_pitch", "hop_step", "search_radius", "drop_threshold", "slide_speed",
             "three_point_force", "slide_press_force", "approach_speed", "search_stiffness",
@@ -225,19 +225,19 @@ class AssemblyConfig:
         if not 0.0 < self.moment_limit_fraction <= 1.0:
             raise ConfigError("assembly.moment_limit_fraction",
                               f"must lie in (0, 1], got {self.moment_limit_fraction!r}")
-        _non_negative(self, "search_tilt_deg", "wiggle_amplitude_deg",
+        check_non_negative(self, "search_tilt_deg", "wiggle_amplitude_deg",
                       prefix="assembly.")
-        _positive(
+        check_positive(
             self, "rot_contact_damping", "contact_damping", "rot_compliance_angle_deg",
             "still_time", "align_step_deg", "hop_lift_speed", "hop_speed", "hop_descent_speed",
             "hop_rot_stiffness", prefix="assembly.",
         )
-        _non_negative(
+        check_non_negative(
             self, "entry_depth", "settle_time", "length_tolerance", "retry_lift",
             "slide_settle_time", "climb_travel", "plane_contact_margin", "hop_height",
             "hop_press_time", "hop_settle_time", prefix="assembly.",
         )
-        _fraction(self, "lost_width_fraction", "three_point_fraction", prefix="assembly.")
+        check_fraction(self, "lost_width_fraction", "three_point_fraction", prefix="assembly.")
         for name, least in (("max_retries", 0), ("max_align_adjustments", 1),
                             ("max_insert_stalls", 0), ("plane_window", 1)):
             value = getattr(self, name)

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from vgs.config.cell import CellConfig
-from vgs.config.checks import _fraction
+from vgs.config.checks import check_fraction
 from vgs.config.control import AssemblyConfig, ControllerConfig
 from vgs.config.learning import AgentConfig, NetworkConfig, RewardConfig, TrainConfig
 from vgs.errors import ConfigError
@@ -34,7 +34,7 @@ class EvalConfig:
     def __post_init__(self) -> None:
         if self.episodes < 1:
             raise ConfigError("eval.episodes", "must be >= 1")
-        _fraction(self, "mass_range", "length_range", prefix="eval.")
+        check_fraction(self, "mass_range", "length_range", prefix="eval.")
 
 
 @dataclass(frozen=True)

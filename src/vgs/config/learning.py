@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import ClassVar
 
-from vgs.config.checks import _fraction, _non_negative, _positive
+from vgs.config.checks import check_fraction, check_non_negative, check_positive
 from vgs.errors import ConfigError
 
 BACKBONES = ("densenet121", "light")
@@ -71,7 +71,7 @@ class NetworkConfig:
         if self.precision not in PRECISIONS:
             raise ConfigError("network.precision",
                               f"must be one of {PRECISIONS}, got {self.precision!r}")
-        _positive(self, "depth_std", prefix="network.")
+        check_positive(self, "depth_std", prefix="network.")
 
     @property
     def q_maps(self) -> int:
@@ -115,8 +115,8 @@ class AgentConfig:
     RETIRED: ClassVar[tuple[str, ...]] = ("gamma", "target_update_period")
 
     def __post_init__(self) -> None:
-        _positive(self, "learning_rate", "delta_q_threshold", prefix="agent.")
-        _fraction(self, "momentum", "epsilon_start", "epsilon_end", prefix="agent.")
+        check_positive(self, "learning_rate", "delta_q_threshold", prefix="agent.")
+        check_fraction(self, "momentum", "epsilon_start", "epsilon_end", prefix="agent.")
         for name in ("random_episodes", "replay_batch"):
             if getattr(self, name) < 0:
                 raise ConfigError(f"agent.{name}", "must be >= 0")
@@ -144,7 +144,7 @@ class RewardConfig:
     threshold_percentile: float = 50.0
 
     def __post_init__(self) -> None:
-        _non_negative(self, "grasp", "assembly", prefix="reward.")
+        check_non_negative(self, "grasp", "assembly", prefix="reward.")
         if self.threshold_s is not None and not self.threshold_s > 0:
             raise ConfigError("reward.threshold_s", "must be > 0 when given")
         if not 0.0 < self.threshold_percentile < 100.0:

@@ -71,13 +71,13 @@ from vgs.experiments.policies import finished_as_policy, pixel_command
 from vgs.experiments.trainfolder import (
     RECORD_COLUMNS,
     TrainState,
-    _open_csv,
-    _sha256,
     check_start,
     episode_seed,
     load_checkpoint,
+    open_table,
     read_rows,
     save_checkpoint,
+    sha256_hex,
 )
 from vgs.grasping.agent import DeltaQMonitor, GraspAction, GraspAgent
 from vgs.grasping.preprocess import peg_mask
@@ -224,7 +224,7 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
             state.episode = episode + 1
             if state.episode % cfg.train.checkpoint_every == 0 or state.episode == total:
                 state.rng_state = rng.bit_generator.state
-                state.table_sha256 = _sha256(read_regular(out / "episodes.csv",
+                state.table_sha256 = sha256_hex(read_regular(out / "episodes.csv",
                                                               MAX_JOURNAL_BYTES))
                 save_checkpoint(ckpt, agent, replay, state, monitor)
                 if not progress:  # a line per checkpoint for logs of unattended runs
@@ -363,7 +363,7 @@ class _TrainLog:
 
         self.out, self.mode, self.total = out, mode, total
         self.writer = SummaryWriter(str(out / "tensorboard"), purge_step=start)
-        self.csv_file, self.table = _open_csv(out / "episodes.csv", rows)
+        self.csv_file, self.table = open_table(out / "episodes.csv", rows)
         self.bar = tqdm(range(start, total), initial=start, total=total, desc=f"train {mode}",
                         disable=not progress, dynamic_ncols=True, position=position)
         self.recent: list[tuple[bool, float]] = []

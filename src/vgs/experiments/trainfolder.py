@@ -107,19 +107,19 @@ def read_rows(path: Path, cfg: ExperimentConfig, mode: str, keep: int,
         raise CorruptFileError(path, f"holds {len(kept) - 1} rows but the checkpoint is at "
                                      f"episode {keep}; restore it or train again into a new "
                                      "folder")
-    if digest is not None and _sha256("".join(kept).encode("utf-8")) != digest:
+    if digest is not None and sha256_hex("".join(kept).encode("utf-8")) != digest:
         raise CorruptFileError(path, f"rows 0-{keep - 1} differ from those the checkpoint saw; "
                                      "restore the file or train again into a new folder")
     return kept
 
 
-def _sha256(data: bytes) -> str:
+def sha256_hex(data: bytes) -> str:
     import hashlib
 
     return hashlib.sha256(data).hexdigest()
 
 
-def _open_csv(path: Path, lines: list[str]) -> Any:
+def open_table(path: Path, lines: list[str]) -> Any:
     """Append-only per-episode table, rewritten (atomically) with the checked ``lines`` first."""
     checkpoint.atomic_write_text(path, "".join(lines))
     f = checkpoint.open_append(path)
