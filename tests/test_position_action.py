@@ -10,8 +10,8 @@ import pytest
 
 from vgs.assembly.episode import center_policy, peg_axis_from_heightmap
 from vgs.config import AgentConfig, NetworkConfig, profile
-from vgs.experiments.policies import RandomPolicy, action_angle, pixel_command
-from vgs.grasping.actions import peg_mask, perceived_jaw_angle
+from vgs.experiments.policies import RandomPolicy, pixel_command
+from vgs.grasping.actions import closing_angle, peg_mask, perceived_jaw_angle
 from vgs.grasping.agent import GraspAgent
 from vgs.sim.camera import Heightmap
 
@@ -46,7 +46,8 @@ def test_a_chosen_pixel_is_a_grasp_there_with_the_jaws_across_the_axis(phi_deg: 
     assert network.action == "position"
     row, col = SIZE // 2 + 5, SIZE // 2 - 3  # a peg pixel off the centre
     assert peg_mask(hm.depth)[row, col]
-    command = pixel_command(hm, row, col, action_angle(network, 0, hm.depth))
+    command = pixel_command(hm, row, col, closing_angle(network.action, 0,
+                                                        network.num_rotations, hm.depth))
     assert (command.x, command.y) == pytest.approx(hm.pixel_to_world(row, col))
     # The pads' long side lies along the peg's axis: the jaws close across it.
     assert folded_deg(command.yaw, phi) < 1.0

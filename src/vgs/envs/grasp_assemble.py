@@ -60,8 +60,8 @@ from vgs.assembly.episode import EpisodeRunner
 from vgs.config import CONDITIONS, ExperimentConfig, PegConfig, override, profile
 from vgs.errors import ConfigError
 from vgs.experiments.evaluate import condition_peg
-from vgs.experiments.policies import action_angle, pixel_command
-from vgs.grasping.actions import peg_mask
+from vgs.experiments.policies import pixel_command
+from vgs.grasping.actions import closing_angle, peg_mask
 from vgs.grasping.rewards import MODES, episode_reward, next_threshold
 from vgs.sim.camera import Heightmap
 from vgs.validate import check_config
@@ -227,7 +227,9 @@ class GraspAssembleEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             raise gym.error.ResetNeeded("the episode has ended (every step ends one); call "
                                         "reset() before step()")
         k, row, col = self._check_action(action)
-        command = pixel_command(hm, row, col, action_angle(self.cfg.network, k, hm.depth))
+        network = self.cfg.network
+        command = pixel_command(hm, row, col, closing_angle(network.action, k,
+                                                            network.num_rotations, hm.depth))
         listing = self.render_mode == "rgb_array_list"  # record the states to draw them after
         record, robot, _ = self.runner.run(self._seed, lambda _hm: command, peg=self._peg,
                                            trace=listing)

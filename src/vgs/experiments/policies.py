@@ -33,7 +33,7 @@ from vgs.assembly.episode import GraspCommand, center_policy
 from vgs.checkpoint import MAX_CHECKPOINT_BYTES, check_regular
 from vgs.config import ExperimentConfig, NetworkConfig, from_dict
 from vgs.errors import ConfigError, CorruptFileError
-from vgs.grasping.actions import peg_mask, perceived_jaw_angle, rotation_angle
+from vgs.grasping.actions import closing_angle, peg_mask
 from vgs.sim.camera import Heightmap
 
 HEURISTICS = ("center", "random")
@@ -66,15 +66,6 @@ def pads_heading(angle: float) -> float:
     ``(cos angle, sin angle)`` in (column, row) pixel axes, which are world (x, y): the grasp
     primitive's yaw, perpendicular to the closing direction."""
     return angle - math.pi / 2
-
-
-def action_angle(network: NetworkConfig, rotation: int, depth: np.ndarray) -> float:
-    """Closing direction [rad] of an action's jaws in pixel axes: across the peg's perceived
-    axis for the position action (:func:`vgs.grasping.actions.perceived_jaw_angle`), theta_k
-    of rotation k for the rotation action."""
-    if network.action == "position":
-        return perceived_jaw_angle(depth)
-    return rotation_angle(rotation, network.num_rotations)
 
 
 def pixel_command(hm: Heightmap, row: int, col: int, angle: float) -> GraspCommand:
@@ -111,7 +102,7 @@ class RandomPolicy:
         position = self.network.action == "position"
         k = 0 if position else int(rng.integers(self.network.num_rotations))
         i, j = int(rows[pick]), int(cols[pick])
-        angle = action_angle(self.network, k, hm.depth)
+        angle = closing_angle(self.network.action, k, self.network.num_rotations, hm.depth)
         return Decision(pixel_command(hm, i, j, angle), rotation=k, row=i, col=j)
 
 

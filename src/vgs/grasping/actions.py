@@ -74,6 +74,15 @@ def perceived_jaw_angle(depth: np.ndarray) -> float:
     return math.atan2(float(axis[1]), float(axis[0])) + math.pi / 2
 
 
+def closing_angle(action: str, rotation: int, num_rotations: int, depth: np.ndarray) -> float:
+    """Closing direction [rad] of an action's jaws in pixel axes: across the peg's perceived
+    axis for the ``position`` action (:func:`perceived_jaw_angle`), theta_k of rotation k for
+    the ``rotation`` action (:func:`rotation_angle`)."""
+    if action == "position":
+        return perceived_jaw_angle(depth)
+    return rotation_angle(rotation, num_rotations)
+
+
 def peg_mask(depth: np.ndarray, min_height: float = PEG_PIXEL_HEIGHT) -> np.ndarray:
     """Pixels on the object: height above the table strictly greater than ``min_height``.
 

@@ -176,12 +176,17 @@ class GraspAgent:
 
     def q_values(self, color: np.ndarray, depth: np.ndarray) -> np.ndarray:
         """Q map (R, H, W), float32, of the evaluation network in eval mode, no gradients."""
+        return self._q_map(color, depth, self._turn(depth))
+
+    def _q_map(self, color: np.ndarray, depth: np.ndarray, turn: list[float] | None
+               ) -> np.ndarray:
+        """:meth:`q_values` with the input turn (:meth:`_turn`) already known."""
         net = self.eva_net
         c, d = self._inputs(color, depth)
         was_training = net.training
         net.eval()
         with torch.inference_mode(), self._autocast():
-            q = net(c, d, angles=self._turn(depth))[0].float().cpu().numpy()
+            q = net(c, d, angles=turn)[0].float().cpu().numpy()
         net.train(was_training)
         return q
 
@@ -224,7 +229,8 @@ class GraspAgent:
         check_heightmaps(color, depth)
         height, width = depth.shape
         explored = bool(rng.random() < epsilon)
-        q = None if explored and skip_q_if_exploring else self.q_values(color, depth)
+        turn = self._turn(depth)  # the position action's perceived angle, read once
+        q = None if explored and skip_q_if_exploring else self._q_map(color, depth, turn)
         if valid_mask is None:
             valid = np.ones((height, width), bool)
         else:
@@ -243,8 +249,7 @@ class GraspAgent:
         else:
             masked = np.where(valid[None], q, -np.inf)
             k, i, j = (int(v) for v in np.unravel_index(int(np.argmax(masked)), masked.shape))
-        angle = (perceived_jaw_angle(depth) if self.position_action
-                 else rotation_angle(k, self.num_rotations))
+        angle = turn[0] if turn is not None else rotation_angle(k, self.num_rotations)
         return GraspAction(
             rotation=k, row=i, col=j, angle=angle,
             q_value=math.nan if q is None else float(q[k, i, j]), explored=explored, q_map=q,
