@@ -49,10 +49,10 @@ import numpy as np
 from bench_eval import network_step_seconds  # this folder (the script's) is on sys.path
 from vgs.assembly.episode import EpisodeRunner, center_policy
 from vgs.config import BACKBONES, override, profile
-from vgs.experiments.episodepool import EpisodeWorker, GraspTask, TrainingPool
-from vgs.experiments.policies import pixel_command
-from vgs.experiments.trainfolder import episode_seed
 from vgs.grasping.actions import peg_mask, rotation_angle
+from vgs.rollout.episodepool import EpisodeWorker, GraspTask, TrainingPool
+from vgs.rollout.policies import pixel_command
+from vgs.runfolder.trainfolder import episode_seed
 
 NODE_CORES = 16
 

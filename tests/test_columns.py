@@ -26,12 +26,13 @@ from vgs.columns import (
     markdown,
 )
 from vgs.config import profile
-from vgs.experiments import sweep, trainfolder
+from vgs.experiments import sweep
 from vgs.experiments.evaluate import EvalSpec, plan_episodes
-from vgs.experiments.journal import encode_row, read_journal
-from vgs.experiments.status import _flag
 from vgs.jsonsafe import dumps
-from vgs.runfolder import read_table
+from vgs.runfolder import trainfolder
+from vgs.runfolder.common import read_table
+from vgs.runfolder.journal import encode_row, read_journal
+from vgs.runfolder.status import flag_count
 
 ROOT = Path(__file__).resolve().parents[1]
 SUMMARY_TABLES = ("results.csv", "seeds.csv")  # statistics over episodes, not episode rows
@@ -123,8 +124,8 @@ def test_every_table_and_json_file_a_reproduction_writes(quick_reproduction: Any
     and ``vgs export-policy`` on it: every table and journal uses the vocabulary (units in the
     parquet metadata, booleans as booleans, no legacy name), one quantity has one name and one
     unit everywhere, and every JSON file parses as strict JSON."""
-    from vgs.experiments.export_policy import export_policy
-    from vgs.experiments.seeds import seeds_report
+    from vgs.analysis.seeds import seeds_report
+    from vgs.tools.export_policy import export_policy
 
     out = quick_reproduction.out
     assert quick_reproduction.proc.returncode == 0, quick_reproduction.proc.stderr
@@ -243,7 +244,7 @@ def test_legacy_tables_still_load(tmp_path: Path) -> None:
         for name in ("grasp_success", "assembly_success", "explored"):
             assert df[name].dtype == bool
             assert df[name].tolist() == [f in ("1", "True") for f in flags]
-    assert [_flag(v) for v in ("1", "0", "True", "False", "", "x")] == [1, 0, 1, 0, 0, 0]
+    assert [flag_count(v) for v in ("1", "0", "True", "False", "", "x")] == [1, 0, 1, 0, 0, 0]
 
 
 def test_legacy_journal_still_reads(tmp_path: Path) -> None:
@@ -285,8 +286,8 @@ def test_an_evaluation_started_before_the_vocabulary_resumes(
     """A journal of legacy rows (old names and units, bare NaN, the old checksum) resumed by
     this vgs gives the table an uninterrupted run writes (physics-free stand-in)."""
     from experiments import fakes
-    from vgs.experiments import episodepool
     from vgs.experiments import evaluate as evaluate_mod
+    from vgs.rollout import episodepool
 
     monkeypatch.setattr(episodepool, "EpisodeRunner", fakes.FakeRunner)
     cfg = fakes.tiny_config()

@@ -16,10 +16,10 @@ import torch
 
 from vgs.config import ExperimentConfig, override, profile, to_dict
 from vgs.errors import ConfigError
-from vgs.experiments.export_policy import export_policy
 from vgs.experiments.train import TrainState, save_checkpoint
 from vgs.grasping.agent import DeltaQMonitor, GraspAgent
 from vgs.grasping.replay import ReplayBuffer
+from vgs.tools.export_policy import export_policy
 
 ROOT = Path(__file__).resolve().parents[1]
 VGS = str(Path(sys.executable).with_name("vgs"))

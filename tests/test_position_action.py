@@ -10,9 +10,9 @@ import pytest
 
 from vgs.assembly.episode import center_policy, peg_axis_from_heightmap
 from vgs.config import AgentConfig, NetworkConfig, profile
-from vgs.experiments.policies import RandomPolicy, pixel_command
 from vgs.grasping.actions import closing_angle, peg_mask, perceived_jaw_angle
 from vgs.grasping.agent import GraspAgent
+from vgs.rollout.policies import RandomPolicy, pixel_command
 from vgs.sim.camera import Heightmap
 
 SIZE, PIXEL = 96, 0.002  # 96 px of 2 mm

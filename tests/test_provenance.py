@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 
 import vgs
-from vgs.runfolder import provenance, read_json
+from vgs.runfolder.common import provenance, read_json
 
 SMALL = ["--profile", "smoke", "--set", "cell.camera.size=64", "--set",
          "cell.camera.pixel_size=0.007", "--no-progress"]

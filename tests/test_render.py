@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from vgs.config import profile
-from vgs.experiments.demo import demo_video, frame_indices, run_demo
-from vgs.render import gl_available
+from vgs.render import frame_indices, gl_available
 from vgs.sim.scenery import overhead_fovy
+from vgs.tools.demo import demo_video, run_demo
 
 VGS = str(Path(sys.executable).with_name("vgs"))
 GL, GL_REASON = gl_available()

@@ -10,7 +10,7 @@ import pytest
 
 from vgs.config import AgentConfig, profile, same_config, to_dict, without_retired
 from vgs.errors import RunMismatchError
-from vgs.runfolder import check_request
+from vgs.runfolder.common import check_request
 from vgs.validate import BOUNDS
 
 

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from vgs.config import override, profile
-from vgs.experiments.scene import HOME_KEY, export_scene
 from vgs.sim import ur5
 from vgs.sim.cell import HOME_Q, Cell
 from vgs.sim.scenery import CAMERAS
+from vgs.tools.scene import HOME_KEY, export_scene
 
 
 @pytest.fixture(scope="module")

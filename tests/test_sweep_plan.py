@@ -8,10 +8,9 @@ import math
 import numpy as np
 import pytest
 
+from vgs.analysis.sweepfigure import disturbing_moments
 from vgs.config import PegConfig, profile
 from vgs.errors import ConfigError, VGSError
-from vgs.experiments.journal import encode_row
-from vgs.experiments.plots import disturbing_moments
 from vgs.experiments.sweep import (
     COLUMNS,
     SweepSpec,
@@ -24,6 +23,7 @@ from vgs.experiments.sweep import (
     run_sweep,
     summarize,
 )
+from vgs.runfolder.journal import encode_row
 
 
 def test_default_offsets_span_the_graspable_length() -> None:
@@ -179,10 +179,10 @@ def test_results_do_not_depend_on_the_worker_count() -> None:
 
 def test_every_published_journal_reads_under_the_integrity_rule() -> None:
     """Each journal committed under docs/results carries a checksum on every row, or is one of
-    the journals published before the rule (vgs.experiments.journal.PUBLISHED, by SHA-256)."""
+    the journals published before the rule (vgs.runfolder.journal.PUBLISHED, by SHA-256)."""
     from pathlib import Path
 
-    from vgs.experiments.journal import read_lines
+    from vgs.runfolder.journal import read_lines
 
     root = Path(__file__).resolve().parents[1] / "docs" / "results"
     journals = sorted(root.rglob("journal.jsonl"))

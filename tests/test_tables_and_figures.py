@@ -10,13 +10,14 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-import vgs.experiments
+import vgs
+from vgs.analysis.palette import POLICY_COLORS, policy_color
 from vgs.cli.options import config_from_args, flag_overrides
 from vgs.cli.parser import build_parser
 from vgs.columns import rounded, rounded_rows
-from vgs.experiments.palette import POLICY_COLORS, policy_color
 
-FIGURES = ("reportfigures.py", "curves.py", "seeds.py", "plots.py", "demo.py")
+FIGURES = ("analysis/reportfigures.py", "analysis/curves.py", "analysis/heatmap.py",
+           "analysis/seeds.py", "analysis/sweepfigure.py", "tools/demofigure.py", "tools/demo.py")
 
 
 def test_times_are_written_to_the_ms_and_nothing_else_moves() -> None:
@@ -32,12 +33,12 @@ def test_times_are_written_to_the_ms_and_nothing_else_moves() -> None:
 
 
 def test_one_colour_per_policy_in_every_figure() -> None:
-    """The figure modules take policy colours from vgs.experiments.palette; none names a
+    """The figure modules take policy colours from vgs.analysis.palette; none names a
     colour of the palette's policies itself (VGS was orange in one figure, red in another)."""
     assert len(set(POLICY_COLORS.values())) == len(POLICY_COLORS)
     assert policy_color("vgs") == "tab:red" and policy_color("mine:fn") not in \
         POLICY_COLORS.values()
-    root = Path(vgs.experiments.__file__).parent
+    root = Path(vgs.__file__).parent
     for name in FIGURES:
         text = (root / name).read_text()
         for colour in [*POLICY_COLORS.values(), "tab:orange", '"C1"', "'C1'"]:
@@ -54,7 +55,7 @@ def test_train_takes_workers_as_parallel_episodes() -> None:
 @pytest.mark.slow
 def test_report_rerun_keeps_its_title_and_results_have_total_gain(quick_reproduction,
                                                                    tmp_path: Path) -> None:
-    from vgs.experiments.report import build_report
+    from vgs.analysis.report import build_report
 
     assert quick_reproduction.proc.returncode == 0, quick_reproduction.proc.stderr
     src = quick_reproduction.out

@@ -198,7 +198,7 @@ def test_a_run_carried_through_git_resumes_and_its_finished_runs_stay_done(
     import torch
 
     from vgs.errors import CorruptFileError
-    from vgs.experiments.policies import load_trained_agent
+    from vgs.rollout.policies import load_trained_agent
 
     run = tmp_path / "here" / "repro"
     shutil.copytree(full_run[0], run / "train" / "done")

@@ -1,5 +1,5 @@
 """Type and seed checks of a whole configuration (vgs.validate) and the field-by-field
-comparison of a request with a recorded configuration (vgs.runfolder.check_request)."""
+comparison of a request with a recorded configuration (vgs.runfolder.common.check_request)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pytest
 
 from vgs.config import override, profile, to_dict
 from vgs.errors import ConfigError, CorruptFileError, RunMismatchError
-from vgs.runfolder import check_request
+from vgs.runfolder.common import check_request
 from vgs.validate import check_config, check_seed
 
 

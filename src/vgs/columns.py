@@ -121,7 +121,7 @@ COLUMNS: dict[str, Column] = {
 }
 
 _RATE = "fraction of the episodes"
-# The gains of VGS over the baseline (vgs.experiments.stats): on the mean times of the successes
+# The gains of VGS over the baseline (vgs.analysis.stats): on the mean times of the successes
 # (the report, seeds.csv) and on the summed times of all attempts (seeds.csv).
 _GAINS = (("gain", "efficiency gain over the baseline, (T_base - T) / T_base on the mean times "
                    "of the successes"),
@@ -317,7 +317,7 @@ def rounded_rows(rows: Any) -> list[dict[str, Any]]:
 def write_parquet(df: Any, path: Path, metadata: dict[str, str] | None = None) -> None:
     """Write a table (pandas DataFrame, no index) to ``path`` as parquet, each field's metadata
     holding its ``unit`` and ``description``; ``metadata`` (e.g.
-    :func:`vgs.runfolder.provenance`) goes into the schema's metadata, read back with
+    :func:`vgs.runfolder.common.provenance`) goes into the schema's metadata, read back with
     ``pyarrow.parquet.read_schema(path).metadata``."""
     import pyarrow as pa
     import pyarrow.parquet as pq

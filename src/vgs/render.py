@@ -252,3 +252,22 @@ def write_video(path: str | Path, frames: Sequence[np.ndarray], fps: float) -> P
         for f in frames:
             writer.append_data(f)
     return path
+
+
+def frame_indices(times: np.ndarray, fps: float, speed: float) -> np.ndarray:
+    """Indices of the ticks shown as video frames: one every ``speed / fps`` simulated seconds.
+
+    Args:
+        times: Simulated time of each recorded tick [s], increasing.
+        fps: Video frames per second.
+        speed: Simulated seconds per second of video.
+
+    Returns:
+        For each frame, the index of the last tick at or before its time.
+    """
+    if times.size == 0:
+        return np.zeros(0, dtype=int)
+    step = speed / fps
+    frame_times = times[0] + step * np.arange(int((times[-1] - times[0]) / step) + 1)
+    return np.clip(np.searchsorted(times, frame_times + 1e-9, side="right") - 1, 0,
+                   times.size - 1)

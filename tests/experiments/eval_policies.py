@@ -7,7 +7,7 @@ import os
 from pathlib import Path
 from typing import Any
 
-from vgs.experiments.policies import CenterPolicy, Decision
+from vgs.rollout.policies import CenterPolicy, Decision
 
 
 class Raising:

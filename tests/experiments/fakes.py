@@ -81,7 +81,8 @@ class FakeRunner:
 
 def install(delay: float = 0.0) -> None:
     """Put :class:`FakeRunner` in place of the physics for training and evaluation."""
-    from vgs.experiments import episodepool, train
+    from vgs.experiments import train
+    from vgs.rollout import episodepool
 
     FakeRunner.delay = delay
     train.EpisodeRunner = FakeRunner  # type: ignore[misc]
@@ -101,7 +102,8 @@ def run_cli(argv: list[str], delay: float) -> None:
 def use_fake_physics(monkeypatch: Any) -> None:
     """In this process: :class:`FakeRunner` for training and evaluation, one core (undone by
     pytest's ``monkeypatch`` after the test)."""
-    from vgs.experiments import episodepool, train
+    from vgs.experiments import train
+    from vgs.rollout import episodepool
 
     monkeypatch.setattr(train, "EpisodeRunner", FakeRunner)
     monkeypatch.setattr(episodepool, "EpisodeRunner", FakeRunner)

@@ -14,7 +14,6 @@ import torch
 
 from vgs.config import profile, to_dict
 from vgs.errors import ConfigError, EpisodeError
-from vgs.experiments import episodepool
 from vgs.experiments.evaluate import (
     EvalSpec,
     evaluate,
@@ -24,6 +23,7 @@ from vgs.experiments.evaluate import (
 from vgs.experiments.train import TrainState, save_checkpoint
 from vgs.grasping.agent import DeltaQMonitor, GraspAgent
 from vgs.grasping.replay import ReplayBuffer
+from vgs.rollout import episodepool
 
 from . import eval_policies, fakes
 
@@ -167,7 +167,7 @@ def test_heuristic_workers_start_without_torch() -> None:
     code = (
         "import sys\n"
         "from vgs.config import profile\n"
-        "from vgs.experiments.episodepool import EpisodeWorker\n"
+        "from vgs.rollout.episodepool import EpisodeWorker\n"
         "cfg = profile('smoke')\n"
         "worker = EpisodeWorker(cfg)\n"
         "worker.policy('center')\n"
@@ -179,7 +179,7 @@ def test_heuristic_workers_start_without_torch() -> None:
 
 
 def test_network_worker_uses_one_torch_thread(cfg, run_dir: Path) -> None:
-    from vgs.experiments.episodepool import EpisodeWorker
+    from vgs.rollout.episodepool import EpisodeWorker
 
     threads = torch.get_num_threads()
     try:

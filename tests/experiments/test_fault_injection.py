@@ -56,8 +56,8 @@ def _child(kind: str, out: str, delay: float) -> None:
 
 @pytest.fixture(scope="module")
 def fake_physics():
-    from vgs.experiments import episodepool
     from vgs.experiments import train as train_mod
+    from vgs.rollout import episodepool
 
     saved = train_mod.EpisodeRunner, episodepool.EpisodeRunner
     fakes.install()

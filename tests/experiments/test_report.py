@@ -10,8 +10,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from vgs.analysis.report import PAPER, build_report, efficiency_gain
 from vgs.errors import ConfigError
-from vgs.experiments.report import PAPER, build_report, efficiency_gain
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "report_small"
 
@@ -56,7 +56,7 @@ def test_failures_are_left_out_of_the_times() -> None:
 
 
 def test_time_per_assembled_peg_counts_failed_attempts() -> None:
-    from vgs.experiments.evaluate import summarize
+    from vgs.analysis.stats import summarize
 
     df = _table("vgs", np.array([40.0, 60.0, 0.0, 0.0]),
                 success=np.array([True, True, False, False]))
@@ -124,7 +124,7 @@ def test_report_states_each_runs_own_wall_time(tmp_path: Path) -> None:
     reproduce`` (scripts/paper_light.sh's baseline), interrupted or moved between machines."""
     import json
 
-    from vgs.experiments.trainfolder import CSV_COLUMNS
+    from vgs.runfolder.trainfolder import CSV_COLUMNS
 
     run = tmp_path / "run"
     shutil.copytree(DATA, run)

@@ -17,8 +17,8 @@ import torch
 
 from vgs.cli import main
 from vgs.config import to_dict
-from vgs.experiments.journal import encode_row
-from vgs.runfolder import host, locked
+from vgs.runfolder.common import host, locked
+from vgs.runfolder.journal import encode_row
 
 from . import fakes
 
@@ -71,7 +71,7 @@ def _run_folder(folder: Path, mode: str, checkpoint_bytes: bytes, finished: bool
                                                  "schedule_episodes": 6}))
     (folder / "checkpoint.pt").write_bytes(checkpoint_bytes)
     if finished:
-        from vgs.experiments.trainfolder import CSV_COLUMNS, episode_seed
+        from vgs.runfolder.trainfolder import CSV_COLUMNS, episode_seed
 
         with (folder / "episodes.csv").open("w", newline="") as fh:
             writer = csv.DictWriter(fh, fieldnames=CSV_COLUMNS)
@@ -321,7 +321,7 @@ def test_ctrl_c_is_one_line_and_the_run_resumes(tmp_path: Path, capsys,
 
 def test_rows_record_the_host_and_mixed_hosts_are_reported(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    from vgs.experiments.report import hosts_note
+    from vgs.analysis.report import hosts_note
 
     out = tmp_path / "eval"
     assert _eval(capsys, out)[0] == 0
@@ -369,7 +369,7 @@ def test_published_results_load_and_their_reports_rebuild(
 def test_publish_copies_regular_files_never_a_links_target(tmp_path: Path) -> None:
     """``vgs report --publish`` copies the results, not what a symlink in the folder points to
     (issue 41)."""
-    from vgs.experiments.publish import publish
+    from vgs.tools.publish import publish
 
     out, dest = tmp_path / "repro", tmp_path / "pub"
     (out / "sweep").mkdir(parents=True)

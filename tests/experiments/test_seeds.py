@@ -8,9 +8,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from vgs.analysis.seeds import load_seeds, mean_gain, seeds_report, seeds_table
+from vgs.analysis.stats import TOTAL_GAIN, time_arrays, total_gain_pct
 from vgs.errors import ConfigError
-from vgs.experiments.seeds import load_seeds, mean_gain, seeds_report, seeds_table
-from vgs.experiments.stats import TOTAL_GAIN, time_arrays, total_gain_pct
 
 
 def _table(policy: str, times: np.ndarray, run: str, root_seed: int = 7) -> pd.DataFrame:

@@ -1,4 +1,4 @@
-"""The two standard-deviation conventions of the results tables (vgs.experiments.stats)."""
+"""The two standard-deviation conventions of the results tables (vgs.analysis.stats)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from vgs.experiments.stats import population_std, sample_std
+from vgs.analysis.stats import population_std, sample_std
 
 
 def test_sample_and_population_std() -> None:
@@ -26,7 +26,7 @@ def test_the_tables_use_their_published_convention() -> None:
     """Evaluation summaries divide by n - 1, the sweep's by n (docs/results re-derive)."""
     import pandas as pd
 
-    from vgs.experiments.evaluate import summarize as evaluation_summary
+    from vgs.analysis.stats import summarize as evaluation_summary
     from vgs.experiments.sweep import summarize as sweep_summary
 
     times = [10.0, 14.0, 12.0]

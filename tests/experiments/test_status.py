@@ -13,9 +13,9 @@ import pytest
 from vgs import checkpoint
 from vgs.config import profile, to_dict
 from vgs.errors import ConfigError
-from vgs.experiments.journal import encode_row
-from vgs.experiments.layout import eval_jobs, train_runs
-from vgs.experiments.status import eval_progress, folder_status, format_status, train_progress
+from vgs.runfolder.journal import encode_row
+from vgs.runfolder.layout import eval_jobs, train_runs
+from vgs.runfolder.status import eval_progress, folder_status, format_status, train_progress
 
 COLUMNS = ("episode", "mode", "grasp_success", "assembly_success", "assembly_time_s", "wall_s")
 
@@ -137,7 +137,7 @@ def test_status_does_not_import_torch(tmp_path: Path) -> None:
 
 
 def test_engine_note_names_another_mujoco_and_is_silent_for_the_installed_one() -> None:
-    from vgs.runfolder import engine_note, host
+    from vgs.runfolder.common import engine_note, host
 
     installed = host()["mujoco_version"]
     assert engine_note([{"mujoco_version": installed}, {"host_cpu": "x"}]) == ""

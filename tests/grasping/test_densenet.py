@@ -9,7 +9,7 @@ import torch
 
 from vgs.config import NetworkConfig
 from vgs.errors import ConfigError
-from vgs.grasping.densenet import DenseNet121Trunk, _DenseBlock, load_trunk_weights
+from vgs.grasping.densenet import DenseBlock, DenseNet121Trunk, load_trunk_weights
 from vgs.grasping.network import GraspQNetwork
 
 TORCHVISION_FEATURES_PARAMS = 6_953_856  # sum of numel over densenet121().features.parameters()
@@ -56,8 +56,8 @@ def test_output_shape_and_relu(trunk: DenseNet121Trunk) -> None:
 def test_memory_efficient_matches_plain() -> None:
     """Checkpointed dense layers give the same outputs and gradients (one small block)."""
     torch.manual_seed(1)
-    plain = _DenseBlock(3, 16, growth_rate=8, bn_size=2, memory_efficient=False)
-    efficient = _DenseBlock(3, 16, growth_rate=8, bn_size=2, memory_efficient=True)
+    plain = DenseBlock(3, 16, growth_rate=8, bn_size=2, memory_efficient=False)
+    efficient = DenseBlock(3, 16, growth_rate=8, bn_size=2, memory_efficient=True)
     efficient.load_state_dict(plain.state_dict())
     x = torch.randn(2, 16, 8, 8)
     outs, grads = [], []

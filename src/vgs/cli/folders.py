@@ -16,7 +16,7 @@ MAX_HEATMAP_SCENES = 16  # rows of the figure
 
 def cmd_export_policy(args: argparse.Namespace, cfg: ExperimentConfig | None) -> int:
     """Write a training run's network as plain weights plus a JSON description."""
-    from vgs.experiments.export_policy import export_policy
+    from vgs.tools.export_policy import export_policy
 
     written = export_policy(Path(args.run_dir), Path(args.out))
     print(f"wrote {written.weights} ({written.parameters} values; "
@@ -30,7 +30,7 @@ def cmd_export_policy(args: argparse.Namespace, cfg: ExperimentConfig | None) ->
 
 def cmd_heatmap(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     """Q-value heat maps of a training run, untrained beside trained (paper Figure 7)."""
-    from vgs.experiments.heatmap import plot_heatmaps
+    from vgs.analysis.heatmap import plot_heatmaps
 
     if not 1 <= args.scenes <= MAX_HEATMAP_SCENES:
         raise ConfigError("scenes", f"must lie in [1, {MAX_HEATMAP_SCENES}], got {args.scenes}")
@@ -41,7 +41,7 @@ def cmd_heatmap(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
 
 def cmd_curves(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     """Learning curves of runs and where each policy grasps; prints a summary table."""
-    from vgs.experiments.curves import plot_curves
+    from vgs.analysis.curves import plot_curves
 
     summaries = plot_curves([Path(r) for r in args.runs], Path(args.out), window=args.window)
     if args.json:
@@ -60,12 +60,12 @@ def cmd_curves(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
 
 def cmd_report(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     """Build DIR/report.md and DIR/report.html from the results in DIR."""
-    from vgs.experiments.report import build_report
+    from vgs.analysis.report import build_report
 
     path = build_report(Path(args.dir), **({"title": args.title} if args.title else {}))
     print(f"wrote {path} and {path.with_suffix('.html')}")
     if args.publish:
-        from vgs.experiments.publish import publish
+        from vgs.tools.publish import publish
 
         files = publish(Path(args.dir), Path(args.publish))
         nets = [f for f in files if f.name == "policy.pt"]
@@ -79,7 +79,7 @@ def cmd_report(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
 
 def cmd_seeds(args: argparse.Namespace, cfg: ExperimentConfig | None) -> int:
     """Compare VGS with the baseline across the training runs of several results folders."""
-    from vgs.experiments.seeds import seeds_report
+    from vgs.analysis.seeds import seeds_report
 
     path = seeds_report([Path(d) for d in args.dirs], Path(args.out))
     print(path.read_text().split("![", 1)[0].rstrip())
@@ -89,7 +89,7 @@ def cmd_seeds(args: argparse.Namespace, cfg: ExperimentConfig | None) -> int:
 
 def cmd_status(args: argparse.Namespace, cfg: ExperimentConfig | None) -> int:
     """Print the progress of the jobs in a reproduce, train or evaluate folder."""
-    from vgs.experiments.status import format_status
+    from vgs.runfolder.status import format_status
 
     print(format_status(Path(args.dir)))
     return 0

@@ -29,7 +29,7 @@ class UsageError(VGSError):
     """Command-line input that argparse rejects."""
 
 
-class _Parser(argparse.ArgumentParser):
+class CommandParser(argparse.ArgumentParser):
     """An argument parser that raises instead of printing usage and exiting."""
 
     def error(self, message: str) -> NoReturn:

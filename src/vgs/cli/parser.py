@@ -21,8 +21,8 @@ from vgs.cli.folders import (
     cmd_status,
 )
 from vgs.cli.options import (
+    CommandParser,
     UsageError,
-    _Parser,
     config_from_args,
     seed_arg,
 )
@@ -70,13 +70,31 @@ def _config_flags(p: argparse.ArgumentParser, sections: tuple[str, ...] = ()) ->
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``vgs`` argument parser with its subcommands."""
-    parser = _Parser(prog="vgs", description="Visual grasping strategy for peg-in-hole "
+    parser = CommandParser(prog="vgs", description="Visual grasping strategy for peg-in-hole "
                                              "assembly (UR5 + RG2 in MuJoCo).")
     from vgs import __version__
 
     parser.add_argument("--version", action="version", version=f"vgs {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    _add_demo(sub)
+    _add_sweep(sub)
+    _add_export_scene(sub)
+    _add_export_policy(sub)
+    _add_model_info(sub)
+    _add_train(sub)
+    _add_heatmap(sub)
+    _add_curves(sub)
+    _add_evaluate(sub)
+    _add_reproduce(sub)
+    _add_report(sub)
+    _add_seeds(sub)
+    _add_status(sub)
+    _add_config(sub)
+    return parser
 
+
+def _add_demo(sub: Any) -> None:
+    """``vgs demo``."""
     demo = sub.add_parser("demo", help="one whole episode with a figure")
     _config_flags(demo)
     demo.add_argument("--seed", type=seed_arg, help="episode seed (default: the profile's seed)")
@@ -103,6 +121,9 @@ def build_parser() -> argparse.ArgumentParser:
                       help="frame size in pixels (default: %(default)s)")
     demo.set_defaults(func=cmd_demo)
 
+
+def _add_sweep(sub: Any) -> None:
+    """``vgs sweep``."""
     sweep = sub.add_parser("sweep", help="assembly time against the grasp offset")
     _config_flags(sweep)
     sweep.add_argument("--offsets", type=int, default=9,
@@ -123,6 +144,9 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--no-progress", action="store_true", help="no progress bar")
     sweep.set_defaults(func=cmd_sweep)
 
+
+def _add_export_scene(sub: Any) -> None:
+    """``vgs export-scene``."""
     scene = sub.add_parser("export-scene",
                            help="write the cell as MJCF, ready to open in MuJoCo's viewer")
     _config_flags(scene)
@@ -132,6 +156,9 @@ def build_parser() -> argparse.ArgumentParser:
                             "(default: 0)")
     scene.set_defaults(func=cmd_export_scene)
 
+
+def _add_export_policy(sub: Any) -> None:
+    """``vgs export-policy``."""
     export_pol = sub.add_parser("export-policy",
                                 help="a training run's network as plain weights (torch.load "
                                      "weights_only) plus a JSON description")
@@ -142,16 +169,22 @@ def build_parser() -> argparse.ArgumentParser:
                                  "a policy folder vgs evaluate --policy loads")
     export_pol.set_defaults(func=cmd_export_policy)
 
+
+def _add_model_info(sub: Any) -> None:
+    """``vgs model-info``."""
     info = sub.add_parser("model-info",
                           help="parameter counts and tensor shapes of the grasp network")
     _config_flags(info, sections=("network",))
     info.add_argument("--backbone", help="densenet121 or light (default: the profile's)")
     info.add_argument("--rotations", type=int, help="number of grasp rotations R")
-    info.add_argument("--rotate", help="input or features (default: the profile's)")
+    info.add_argument("--rotate", help="input, features or none (default: the profile's)")
     info.add_argument("--size", type=int, default=224, help="heightmap side [px]")
     info.add_argument("--json", action="store_true", help="print JSON")
     info.set_defaults(func=cmd_model_info)
 
+
+def _add_train(sub: Any) -> None:
+    """``vgs train``."""
     train = sub.add_parser("train",
                            help="train the grasp policy (vgs or baseline); resumes from --out")
     _config_flags(train)
@@ -172,6 +205,9 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--no-progress", action="store_true", help="no progress bar")
     train.set_defaults(func=cmd_train)
 
+
+def _add_heatmap(sub: Any) -> None:
+    """``vgs heatmap``."""
     heat = sub.add_parser("heatmap", help="Q heat maps of a run, untrained beside trained "
                                           "(Fig. 7), with the run's own configuration")
     heat.add_argument("run_dir", help="a training run folder")
@@ -179,6 +215,9 @@ def build_parser() -> argparse.ArgumentParser:
     heat.add_argument("--scenes", type=int, default=2, help="scenes, one per row")
     heat.set_defaults(func=cmd_heatmap)
 
+
+def _add_curves(sub: Any) -> None:
+    """``vgs curves``."""
     curves = sub.add_parser("curves",
                             help="learning curves of runs and where each policy grasps")
     curves.add_argument("runs", nargs="+", help="training run folders")
@@ -187,6 +226,9 @@ def build_parser() -> argparse.ArgumentParser:
     curves.add_argument("--json", action="store_true", help="print the summary as JSON")
     curves.set_defaults(func=cmd_curves)
 
+
+def _add_evaluate(sub: Any) -> None:
+    """``vgs evaluate``."""
     evaluate = sub.add_parser("evaluate",
                               help="test one policy on one condition (parallel, resumable)")
     _config_flags(evaluate)
@@ -208,6 +250,9 @@ def build_parser() -> argparse.ArgumentParser:
                                "needs OpenGL) (default: 0)")
     evaluate.set_defaults(func=cmd_evaluate)
 
+
+def _add_reproduce(sub: Any) -> None:
+    """``vgs reproduce``."""
     repro = sub.add_parser("reproduce",
                            help="the paper's experiments: train, evaluate, sweep, report")
     _config_flags(repro)
@@ -218,6 +263,9 @@ def build_parser() -> argparse.ArgumentParser:
     _parallel_flags(repro)
     repro.set_defaults(func=cmd_reproduce)
 
+
+def _add_report(sub: Any) -> None:
+    """``vgs report``."""
     report = sub.add_parser("report",
                             help="write DIR/report.md and DIR/report.html from DIR's results")
     report.add_argument("dir", help="a reproduce folder (with eval/<policy>/<condition>/)")
@@ -228,6 +276,9 @@ def build_parser() -> argparse.ArgumentParser:
     report.add_argument("--title", help="the report's title (default: VGS reproduction report)")
     report.set_defaults(func=cmd_report)
 
+
+def _add_seeds(sub: Any) -> None:
+    """``vgs seeds``."""
     seeds = sub.add_parser("seeds", help="VGS against the baseline per training seed and on "
                                          "average, from several results folders")
     seeds.add_argument("dirs", nargs="+", metavar="DIR",
@@ -237,18 +288,23 @@ def build_parser() -> argparse.ArgumentParser:
                        help="folder of seeds.md, seeds.csv and seeds.png")
     seeds.set_defaults(func=cmd_seeds)
 
+
+def _add_status(sub: Any) -> None:
+    """``vgs status``."""
     status = sub.add_parser("status", help="how far a reproduction, training run or evaluation "
                                            "folder has got (safe while it runs)")
     status.add_argument("dir", help="a reproduce, train or evaluate output folder")
     status.set_defaults(func=cmd_status)
 
+
+def _add_config(sub: Any) -> None:
+    """``vgs config``."""
     config = sub.add_parser("config", help="the resolved configuration: every key --set takes, "
                                            "its value and what it means")
     _config_flags(config)
     config.add_argument("--json", action="store_true",
                         help="print a JSON list of {key, value, doc} with each doc whole")
     config.set_defaults(func=cmd_config)
-    return parser
 
 
 def _parallel_flags(p: argparse.ArgumentParser) -> None:

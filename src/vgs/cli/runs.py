@@ -30,8 +30,8 @@ def cmd_demo(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
 
         require_video_writer(args.video)  # before the episode, not after it
         require_gl()
-    from vgs.experiments.demo import format_report, run_demo
-    from vgs.experiments.plots import demo_figure
+    from vgs.tools.demo import format_report, run_demo
+    from vgs.tools.demofigure import demo_figure
 
     seed = cfg.seed if args.seed is None else args.seed
     result = run_demo(cfg, seed, args.offset / 1000.0, policy=args.policy)
@@ -40,7 +40,7 @@ def cmd_demo(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     figure = demo_figure(result, out / "demo.png")
     video = None
     if args.video and video_size is not None:
-        from vgs.experiments.demo import demo_video
+        from vgs.tools.demo import demo_video
 
         video = demo_video(result, cfg.cell, args.video, fps=args.video_fps,
                            speed=args.video_speed, width=video_size[0], height=video_size[1])
@@ -102,7 +102,7 @@ def _num(value: float | None, digits: int = 2) -> str:
 
 def cmd_export_scene(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     """Write the compiled cell as MJCF and check that MuJoCo loads it."""
-    from vgs.experiments.scene import CONTROL_HINT, export_scene
+    from vgs.tools.scene import CONTROL_HINT, export_scene
 
     info = export_scene(cfg, args.out, seed=args.seed)
     print(f"wrote {info.path} ({info.nbody} bodies, {info.ngeom} geoms, {info.nmesh} meshes, "
@@ -145,7 +145,8 @@ def cmd_train(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
 
 def cmd_evaluate(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     """Evaluate one policy on one condition: DIR/episodes.parquet, .csv and summary.json."""
-    from vgs.experiments.evaluate import EvalSpec, evaluate, summarize
+    from vgs.analysis.stats import summarize
+    from vgs.experiments.evaluate import EvalSpec, evaluate
 
     episodes = cfg.eval.episodes if args.episodes is None else args.episodes
     if args.videos < 0:
@@ -161,7 +162,7 @@ def cmd_evaluate(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
                   ray_address=args.ray_address, progress=not args.no_progress)
     videos = []
     if args.videos:
-        from vgs.experiments.demo import evaluation_videos
+        from vgs.tools.demo import evaluation_videos
 
         videos = evaluation_videos(cfg, spec, Path(args.out), args.videos, df)
     s = summarize(df)

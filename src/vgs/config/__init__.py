@@ -10,8 +10,9 @@ CPU), ``medium`` (1.5-2 hours there) and ``paper`` (the paper's budget: 5000 tra
 
 The package's modules follow what they configure: :mod:`vgs.config.cell` (peg, hole, gripper,
 force-torque sensor, camera, simulation), :mod:`vgs.config.control` (controller, assembly),
-:mod:`vgs.config.learning` (network, agent, reward, training), :mod:`vgs.config.experiment`
-(evaluation, reproduction, :class:`ExperimentConfig`, the profiles) and :mod:`vgs.config.tree`
+:mod:`vgs.config.learning` (network, agent, reward, training), :mod:`vgs.config.conditions`
+(the test conditions, evaluation settings and test scenes), :mod:`vgs.config.experiment`
+(reproduction, :class:`ExperimentConfig`, the profiles) and :mod:`vgs.config.tree`
 (``override``, ``to_dict``, ``from_dict``, ``same_config``, ``without_retired``). Import the
 names from :mod:`vgs.config` itself.
 """
@@ -25,11 +26,17 @@ from vgs.config.cell import (
     PegConfig,
     SimConfig,
 )
+from vgs.config.conditions import (
+    CONDITIONS,
+    EVAL_STREAM,
+    EvalConfig,
+    EvalScene,
+    condition_peg,
+    eval_scenes,
+)
 from vgs.config.control import AssemblyConfig, ControllerConfig
 from vgs.config.experiment import (
-    CONDITIONS,
     PROFILES,
-    EvalConfig,
     ExperimentConfig,
     ReproduceConfig,
     profile,
@@ -54,9 +61,10 @@ from vgs.config.tree import (
 )
 
 __all__ = [
-    "ACTIONS", "BACKBONES", "CONDITIONS", "NO_SUCH_FIELD", "PRECISIONS", "PROFILES", "ROTATE_MODES",
-    "AgentConfig", "AssemblyConfig", "CameraConfig", "CellConfig", "ControllerConfig",
-    "EvalConfig", "ExperimentConfig", "FTSensorConfig", "GripperConfig", "HoleConfig",
-    "NetworkConfig", "PegConfig", "ReproduceConfig", "RewardConfig", "SimConfig", "TrainConfig",
-    "from_dict", "override", "profile", "same_config", "to_dict", "without_retired",
+    "ACTIONS", "BACKBONES", "CONDITIONS", "EVAL_STREAM", "NO_SUCH_FIELD", "PRECISIONS", "PROFILES",
+    "ROTATE_MODES", "AgentConfig", "AssemblyConfig", "CameraConfig", "CellConfig",
+    "ControllerConfig", "EvalConfig", "EvalScene", "ExperimentConfig", "FTSensorConfig",
+    "GripperConfig", "HoleConfig", "NetworkConfig", "PegConfig", "ReproduceConfig", "RewardConfig",
+    "SimConfig", "TrainConfig", "condition_peg", "eval_scenes", "from_dict", "override", "profile",
+    "same_config", "to_dict", "without_retired",
 ]

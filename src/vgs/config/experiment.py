@@ -5,36 +5,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from vgs.config.cell import CellConfig
-from vgs.config.checks import check_fraction
+from vgs.config.conditions import CONDITIONS, EvalConfig
 from vgs.config.control import AssemblyConfig, ControllerConfig
 from vgs.config.learning import AgentConfig, NetworkConfig, RewardConfig, TrainConfig
 from vgs.errors import ConfigError
-
-# The test conditions (paper 4.2), the one list: the evaluation draws each peg
-# (vgs.experiments.evaluate.condition_peg), reproduce.conditions and vgs evaluate --condition
-# take these names, the report titles them (vgs.experiments.reportfigures.CONDITION_TITLES).
-CONDITIONS = ("nominal", "mass", "length")
-
-
-@dataclass(frozen=True)
-class EvalConfig:
-    """Evaluation: the test episodes of one policy on one condition (paper 4.2).
-
-    Attributes:
-        episodes: Test episodes per policy and condition (paper: 1000).
-        mass_range: The ``mass`` condition's peg mass factor is uniform in 1 +- this.
-        length_range: The ``length`` condition's peg length factor is uniform in 1 +- this; the
-            mass follows the length.
-    """
-
-    episodes: int = 1000
-    mass_range: float = 0.15
-    length_range: float = 0.15
-
-    def __post_init__(self) -> None:
-        if self.episodes < 1:
-            raise ConfigError("eval.episodes", "must be >= 1")
-        check_fraction(self, "mass_range", "length_range", prefix="eval.")
 
 
 @dataclass(frozen=True)

@@ -57,12 +57,11 @@ import numpy as np
 from gymnasium import spaces
 
 from vgs.assembly.episode import EpisodeRunner
-from vgs.config import CONDITIONS, ExperimentConfig, PegConfig, override, profile
+from vgs.config import CONDITIONS, ExperimentConfig, PegConfig, condition_peg, override, profile
 from vgs.errors import ConfigError
-from vgs.experiments.evaluate import condition_peg
-from vgs.experiments.policies import pixel_command
 from vgs.grasping.actions import closing_angle, peg_mask
 from vgs.grasping.rewards import MODES, episode_reward, next_threshold
+from vgs.rollout.policies import pixel_command
 from vgs.sim.camera import Heightmap
 from vgs.validate import check_config
 
@@ -184,7 +183,7 @@ class GraspAssembleEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             self._times = []
             self.threshold_s = self.cfg.reward.threshold_s
         self._seed = int(self.np_random.integers(0, 2**31 - 1))
-        self._peg = condition_peg(self.cfg, self.condition,
+        self._peg = condition_peg(self.cfg.cell.peg, self.cfg.eval, self.condition,
                                   float(self.np_random.uniform(-1.0, 1.0)))
         self.heightmap = self.runner.observe(self._seed, self._peg)
         self._trace, self._frames = None, None
@@ -281,8 +280,7 @@ class GraspAssembleEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     def _episode_frames(self, renderer: Any, qpos: np.ndarray, mocap: np.ndarray
                         ) -> list[np.ndarray]:
         """The last step's recorded states drawn, or the current state after a reset."""
-        from vgs.experiments.demo import frame_indices
-        from vgs.render import annotate
+        from vgs.render import annotate, frame_indices
 
         trace = self._trace
         if trace is None or not trace.qpos:

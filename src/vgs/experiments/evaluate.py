@@ -1,18 +1,9 @@
 """Evaluation at scale: one policy, one test condition, N seeded episodes, local or Ray workers.
 
-Episode ``i`` of a run with root seed ``S`` is fully determined by ``(S, i)`` and the policy:
-
-* the episode seed (peg pose, hole displacement, sensor noise) is the first word of
-  ``numpy.random.SeedSequence([S, i, EVAL_STREAM])`` (the tag keeps test scenes apart from the
-  training scenes ``SeedSequence([S, i])`` of a run with the same root seed);
-* a child of that sequence draws the peg of the condition (paper 4.2):
-
-  - ``nominal``: the configured peg (30 mm x 100 mm, 0.55 kg);
-  - ``mass``: ``m = m0 * U(1 - a, 1 + a)`` with ``a = eval.mass_range`` (0.15);
-  - ``length``: ``L = L0 * U(1 - b, 1 + b)`` with ``b = eval.length_range`` (0.15) and the mass
-    following the volume, ``m = m0 * L / L0``;
-
-* the policy's own random draws (the ``random`` policy) use ``default_rng([episode seed, 2])``.
+Episode ``i`` of a run with root seed ``S`` is the test scene ``i`` of the condition
+(:func:`vgs.config.conditions.eval_scenes`: its episode seed and its peg, paper 4.2) and the
+policy; the policy's own random draws (the ``random`` policy) use
+``default_rng([episode seed, 2])``.
 
 So the same seed gives the same table whatever the backend, the worker count and the order in
 which workers finish, and two policies evaluated with the same seed meet the same scenes (a
@@ -22,8 +13,8 @@ in every process.
 Failures never stop a run: an exception inside an episode becomes a row with
 ``failure_reason = "error:<type>: <message>"``; a worker process that dies takes its episode
 with it, the pool is rebuilt and the episode is tried again, up to
-:data:`vgs.experiments.episodepool.MAX_ATTEMPTS` times (then ``failure_reason =
-"worker_lost"``); :mod:`vgs.experiments.episodepool` runs the episodes.
+:data:`vgs.rollout.episodepool.MAX_ATTEMPTS` times (then ``failure_reason =
+"worker_lost"``); :mod:`vgs.rollout.episodepool` runs the episodes.
 
 Resume: every finished row is appended to ``journal.jsonl`` at once; started again with the same
 ``--out`` the run compares the request with ``meta.json`` (policy, condition, seed,
@@ -44,29 +35,25 @@ import contextlib
 import json
 import os
 import sys
-from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
+from vgs.analysis.stats import summarize
 from vgs.assembly.record import EpisodeRecord
 from vgs.checkpoint import atomic_write_text, open_append
 from vgs.columns import rounded, write_parquet
-from vgs.config import CONDITIONS, ExperimentConfig, PegConfig, to_dict
+from vgs.config import CONDITIONS, ExperimentConfig, PegConfig, eval_scenes, to_dict
 from vgs.errors import ConfigError, CorruptFileError, RunMismatchError
-from vgs.experiments.episodepool import BACKENDS, EpisodeTask, run_local, run_ray, task_row
-from vgs.experiments.folderkind import claim
-from vgs.experiments.journal import encode_row, read_journal
-from vgs.experiments.policies import EvalPolicy, load_policy, policy_digest, policy_label
-from vgs.experiments.stats import sample_std
-from vgs.runfolder import check_request, locked, provenance, read_json, write_json
+from vgs.rollout.episodepool import BACKENDS, EpisodeTask, run_local, run_ray, task_row
+from vgs.rollout.policies import EvalPolicy, load_policy, policy_digest, policy_label
+from vgs.runfolder.common import check_request, locked, provenance, read_json, write_json
+from vgs.runfolder.folderkind import claim
+from vgs.runfolder.journal import encode_row, read_journal
 from vgs.validate import MAX_EPISODES, check_config, check_seed
-
-EVAL_STREAM = 0xE7A1  # tags the seed sequences of test episodes
 
 
 @dataclass(frozen=True)
@@ -74,7 +61,7 @@ class EvalSpec:
     """What to evaluate.
 
     Attributes:
-        policy: Policy spec (:mod:`vgs.experiments.policies`).
+        policy: Policy spec (:mod:`vgs.rollout.policies`).
         condition: ``nominal``, ``mass`` or ``length``.
         episodes: Number of test episodes.
         seed: Root seed.
@@ -98,75 +85,13 @@ class EvalSpec:
 
 
 def plan_episodes(cfg: ExperimentConfig, spec: EvalSpec) -> list[EpisodeTask]:
-    """The episodes of ``spec`` in index order (module docstring)."""
-    tasks = []
-    for i in range(spec.episodes):
-        seq = np.random.SeedSequence([spec.seed, i, EVAL_STREAM])
-        seed = int(seq.generate_state(1)[0])
-        rng = np.random.default_rng(seq.spawn(1)[0])
-        peg = condition_peg(cfg, spec.condition, float(rng.uniform(-1.0, 1.0)))
-        tasks.append(EpisodeTask(i, seed, peg, spec.policy))
-    return tasks
-
-
-def condition_peg(cfg: ExperimentConfig, condition: str, factor: float) -> PegConfig:
-    """The peg of a test condition (paper 4.2) for a draw ``factor`` in [-1, 1].
-
-    ``nominal``: the configured peg; ``mass``: its mass times ``1 + eval.mass_range * factor``;
-    ``length``: its length times ``1 + eval.length_range * factor``, the mass following.
-
-    Raises:
-        ConfigError: ``condition`` if it is not one of :data:`CONDITIONS`.
-    """
-    nominal = cfg.cell.peg
-    if condition == "nominal":
-        return nominal
-    if condition == "mass":
-        return replace(nominal, mass=nominal.mass * (1.0 + cfg.eval.mass_range * factor))
-    if condition == "length":
-        scale = 1.0 + cfg.eval.length_range * factor
-        return replace(nominal, length=nominal.length * scale, mass=nominal.mass * scale)
-    raise ConfigError("condition", f"must be one of {CONDITIONS}, got {condition!r}")
-
-
+    """The episodes of ``spec`` in index order: the condition's test scenes
+    (:func:`vgs.config.conditions.eval_scenes`), each to be run by ``spec.policy``."""
+    return [EpisodeTask(s.index, s.seed, s.peg, spec.policy)
+            for s in eval_scenes(cfg.cell.peg, cfg.eval, spec.condition, spec.seed, spec.episodes)]
 
 
 # -- the evaluation run --------------------------------------------------------------------------
-
-
-def summarize(df: pd.DataFrame) -> dict[str, Any]:
-    """Success rates and assembly-time statistics of one evaluation table.
-
-    The ``time_*`` statistics are those of the successful assemblies (the paper's measure);
-    ``time_all_h`` is the simulated assembly time of all episodes, failed attempts included
-    (each until it was given up; a missed grasp costs none): the paper's measure, the total time
-    of its tests, every one of which assembled. ``time_per_assembled_s`` is that time divided by
-    the number of pegs assembled.
-    """
-    ok = df[df["assembly_success"].astype(bool)]
-    times = ok["assembly_time_s"].to_numpy(float)
-    attempts = float(np.nansum(df["assembly_time_s"].to_numpy(float)))
-
-    def stat(fn: Callable[[np.ndarray], Any]) -> float | None:
-        return float(fn(times)) if times.size else None
-
-    return {
-        "episodes": int(len(df)), "grasp_success_rate": float(df["grasp_success"].mean()),
-        "success_rate": float(len(ok) / max(len(df), 1)), "successes": int(len(ok)),
-        "time_total_h": float(times.sum() / 3600.0), "time_mean_s": stat(np.mean),
-        "time_std_s": stat(lambda t: sample_std(t) if t.size > 1 else 0.0),
-        "time_min_s": stat(np.min), "time_max_s": stat(np.max),
-        "time_median_s": stat(np.median),
-        # Throughput: every assembly attempt's simulated time (a failed one until it was given
-        # up; a missed grasp costs none) over the pegs assembled.
-        "time_all_h": attempts / 3600.0,
-        "time_per_assembled_s": attempts / len(ok) if len(ok) else None,
-        "abs_grasp_offset_mean_mm": float(np.nanmean(np.abs(df["grasp_offset_mm"])))
-        if df["grasp_offset_mm"].notna().any() else None,
-        "failure_reasons": {str(k): int(v) for k, v in
-                            df.loc[~df["assembly_success"].astype(bool), "failure_reason"]
-                            .value_counts().items()},
-    }
 
 
 def _prepare(cfg: ExperimentConfig, spec: EvalSpec, out: Path,

@@ -12,13 +12,13 @@ Stages, each resumable on its own (run the same command again to continue):
    are evaluated one after the other and their tables concatenated.
 3. **sweep**: the grasp-position sweep (``DIR/sweep``), ``reproduce.sweep_offsets`` offsets x
    ``reproduce.sweep_trials`` trials, nominal peg.
-4. **report**: :func:`vgs.experiments.report.build_report`.
+4. **report**: :func:`vgs.analysis.report.build_report`.
 
 ``DIR/reproduce.json`` holds the profile, the configuration, the machine and the wall time of
 each stage; it is written atomically. A folder made with another configuration is refused,
 naming the first field that differs; only ``eval.episodes`` may grow (more tests: the journals'
 rows are kept and the extra episodes run). Each stage holds the folder's lock
-(:func:`vgs.runfolder.locked`), so a second ``vgs reproduce`` in the same folder is refused.
+(:func:`vgs.runfolder.common.locked`), so a second ``vgs reproduce`` in the same folder is refused.
 """
 
 from __future__ import annotations
@@ -38,15 +38,23 @@ from typing import Any
 
 import pandas as pd
 
+from vgs.analysis.report import build_report
+from vgs.analysis.stats import summarize
 from vgs.config import ExperimentConfig, to_dict
 from vgs.errors import ConfigError, CorruptFileError
-from vgs.experiments.evaluate import EvalSpec, evaluate_many, summarize, write_tables
-from vgs.experiments.folderkind import claim
-from vgs.experiments.layout import eval_jobs, train_runs
-from vgs.experiments.report import build_report
+from vgs.experiments.evaluate import EvalSpec, evaluate_many, write_tables
 from vgs.experiments.train import train
-from vgs.experiments.trainfolder import git_revision
-from vgs.runfolder import check_request, locked, provenance, read_json, read_table, write_json
+from vgs.runfolder.common import (
+    check_request,
+    locked,
+    provenance,
+    read_json,
+    read_table,
+    write_json,
+)
+from vgs.runfolder.folderkind import claim
+from vgs.runfolder.layout import eval_jobs, train_runs
+from vgs.runfolder.trainfolder import git_revision
 from vgs.validate import check_config
 
 
@@ -122,7 +130,7 @@ class Reproduction:
             self._save()
 
     def locked(self) -> Any:
-        """The folder's lock (:func:`vgs.runfolder.locked`), held by every stage."""
+        """The folder's lock (:func:`vgs.runfolder.common.locked`), held by every stage."""
         return locked(self.out)
 
     def _save(self) -> None:

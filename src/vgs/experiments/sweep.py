@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
+from vgs.analysis.sweepstats import paired_analysis, summarize
 from vgs.assembly.episode import EpisodeRunner, offset_policy
 from vgs.assembly.record import PHASES
 from vgs.checkpoint import (
@@ -42,11 +43,10 @@ from vgs.checkpoint import (
 from vgs.columns import column, normalize_row, rounded_rows
 from vgs.config import CellConfig, ExperimentConfig, PegConfig, to_dict
 from vgs.errors import ConfigError, CorruptFileError, EpisodeError, RunMismatchError, VGSError
-from vgs.experiments.folderkind import claim
-from vgs.experiments.journal import PUBLISHED, Lines, encode_row, read_lines
-from vgs.experiments.sweepstats import paired_analysis, summarize
 from vgs.jsonsafe import dumps
-from vgs.runfolder import check_request, host, hosts_of, locked, read_json, write_json
+from vgs.runfolder.common import check_request, host, hosts_of, locked, read_json, write_json
+from vgs.runfolder.folderkind import claim
+from vgs.runfolder.journal import PUBLISHED, Lines, encode_row, read_lines
 from vgs.validate import MAX_EPISODES, check_config
 
 MAX_TRIALS = 100_000  # trials per offset
@@ -250,7 +250,7 @@ def read_sweep_journal(path: Path, trials: Sequence[Trial], legacy: Collection[s
                        any_legacy: bool = False) -> tuple[dict[int, dict[str, Any]], Lines]:
     """Rows of an earlier run of the same sweep, by trial index, and the journal's lines.
 
-    The journal's integrity rule is every journal's (:func:`vgs.experiments.journal.read_lines`:
+    The journal's integrity rule is every journal's (:func:`vgs.runfolder.journal.read_lines`:
     a checksum on every row but the recorded leading rows written before it; a torn last line
     is dropped). Each row must be the plan's trial of its index (offset, seed, peg), and no
     index may come twice.
@@ -353,7 +353,7 @@ def sweep_to_folder(cfg: ExperimentConfig, spec: SweepSpec, out: Path,
             another sweep, duplicates or rows without checksums.
         FolderBusyError: If another process works in ``out``.
     """
-    from vgs.experiments.plots import sweep_figure
+    from vgs.analysis.sweepfigure import sweep_figure
 
     cfg = check_config(cfg)  # before anything is written
     check_spec(spec, cfg.cell)

@@ -43,7 +43,7 @@ against the plan (episode numbers and seeds), drops the rows written after that 
 and continues. A larger ``train.episodes`` extends the run: the epsilon schedule stays the one
 of the first request (``schedule_episodes`` in ``run.json``), so the episodes already run keep
 their meaning and the extra ones act at the final epsilon. The folder is locked
-(:func:`vgs.runfolder.locked`) while the run works.
+(:func:`vgs.runfolder.common.locked`) while the run works.
 """
 
 from __future__ import annotations
@@ -65,10 +65,15 @@ from vgs.checkpoint import MAX_JOURNAL_BYTES, read_regular
 from vgs.columns import rounded_rows
 from vgs.config import ExperimentConfig
 from vgs.errors import CheckpointError, ConfigError, CorruptFileError
-from vgs.experiments.episodepool import BACKENDS, GraspTask, TrainingPool
-from vgs.experiments.folderkind import claim
-from vgs.experiments.policies import finished_as_policy, pixel_command
-from vgs.experiments.trainfolder import (
+from vgs.grasping.agent import DeltaQMonitor, GraspAction, GraspAgent
+from vgs.grasping.preprocess import peg_mask
+from vgs.grasping.replay import Renderer, ReplayBuffer, Transition, cache_size_for
+from vgs.grasping.rewards import MODES, episode_reward, next_threshold
+from vgs.rollout.episodepool import BACKENDS, GraspTask, TrainingPool
+from vgs.rollout.policies import finished_as_policy, pixel_command
+from vgs.runfolder.common import locked, write_json
+from vgs.runfolder.folderkind import claim
+from vgs.runfolder.trainfolder import (
     RECORD_COLUMNS,
     TrainState,
     check_start,
@@ -79,11 +84,6 @@ from vgs.experiments.trainfolder import (
     save_checkpoint,
     sha256_hex,
 )
-from vgs.grasping.agent import DeltaQMonitor, GraspAction, GraspAgent
-from vgs.grasping.preprocess import peg_mask
-from vgs.grasping.replay import Renderer, ReplayBuffer, Transition, cache_size_for
-from vgs.grasping.rewards import MODES, episode_reward, next_threshold
-from vgs.runfolder import locked, write_json
 from vgs.sim.camera import Heightmap
 from vgs.validate import check_config
 
@@ -101,7 +101,7 @@ def scene_renderer(runner: EpisodeRunner) -> Renderer:
 
 
 def action_to_command(action: GraspAction, hm: Heightmap) -> GraspCommand:
-    """World grasp of a pixel-wise action (:func:`vgs.experiments.policies.pixel_command`)."""
+    """World grasp of a pixel-wise action (:func:`vgs.rollout.policies.pixel_command`)."""
     return pixel_command(hm, action.row, action.col, action.angle)
 
 
@@ -131,7 +131,7 @@ def train(cfg: ExperimentConfig, mode: str, out: Path, progress: bool = True,
         position: Line of the progress bar (several runs side by side).
         backend: Where the physics of parallel episodes (``train.parallel_episodes`` > 1)
             runs: ``local`` (spawned processes) or ``ray`` (Ray actors,
-            :class:`vgs.experiments.episodepool.TrainingPool`); the table is the same.
+            :class:`vgs.rollout.episodepool.TrainingPool`); the table is the same.
         ray_address: Address of a running Ray cluster (``ray``; default: start a local one).
 
     Raises:
@@ -264,7 +264,7 @@ class _EpisodeSource:
 
     One at a time in this process; or, with ``train.parallel_episodes = K > 1``, the grasps of
     K consecutive episodes chosen with the same network and their physics run on K workers of
-    the episode pool (:class:`vgs.experiments.episodepool.TrainingPool`: local processes or Ray
+    the episode pool (:class:`vgs.rollout.episodepool.TrainingPool`: local processes or Ray
     actors); the updates still follow in episode order, so the table is the same.
     """
 
@@ -347,7 +347,7 @@ def config_text(cfg: ExperimentConfig, mode: str) -> str:
     tab (tag ``config``, logged at every start and resume)."""
     from vgs.config import to_dict
     from vgs.jsonsafe import dumps
-    from vgs.runfolder import provenance
+    from vgs.runfolder.common import provenance
 
     lines = dumps({"mode": mode, **provenance(), "config": to_dict(cfg)}, indent=2)
     return "\n".join("    " + line for line in lines.splitlines())  # a Markdown code block

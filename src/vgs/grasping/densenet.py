@@ -88,7 +88,7 @@ class _DenseLayer(nn.Module):
         return self.conv2(self.relu2(self.norm2(bottleneck)))
 
 
-class _DenseBlock(nn.ModuleDict):
+class DenseBlock(nn.ModuleDict):
     """L dense layers; returns the concatenation of the input and all new feature maps."""
 
     def __init__(
@@ -148,7 +148,7 @@ class DenseNet121Trunk(nn.Sequential):
         )
         channels = NUM_INIT_FEATURES
         for i, num_layers in enumerate(BLOCK_CONFIG):
-            layers[f"denseblock{i + 1}"] = _DenseBlock(
+            layers[f"denseblock{i + 1}"] = DenseBlock(
                 num_layers, channels, GROWTH_RATE, BN_SIZE, memory_efficient
             )
             channels += num_layers * GROWTH_RATE

@@ -3,7 +3,7 @@ and two named cameras.
 
 :func:`add_scenery` adds them to a cell's :class:`mujoco.MjSpec`. The simulated cell
 (:func:`vgs.sim.cell.build_spec`) never carries them; the exported scene
-(:mod:`vgs.experiments.scene`) and the renderer (:mod:`vgs.render`) do. Every geom added here
+(:mod:`vgs.tools.scene`) and the renderer (:mod:`vgs.render`) do. Every geom added here
 has ``contype = conaffinity = 0`` and lies in geom group 2, so it touches nothing and the
 ray-cast heightmap camera (group 0 only) does not see it.
 

@@ -30,8 +30,8 @@ from vgs.assembly.episode import EpisodeRunner, GraspCommand
 from vgs.assembly.record import EpisodeRecord
 from vgs.config import ExperimentConfig, PegConfig
 from vgs.errors import ConfigError, EpisodeError, SimulationError, VGSError
-from vgs.experiments.policies import EvalPolicy, is_run_dir, load_policy
-from vgs.runfolder import host
+from vgs.rollout.policies import EvalPolicy, is_run_dir, load_policy
+from vgs.runfolder.common import host
 
 MAX_ATTEMPTS = 3
 BACKENDS = ("local", "ray")

@@ -17,8 +17,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from vgs.analysis.palette import LINESTYLES, policy_color  # noqa: E402
 from vgs.errors import ConfigError  # noqa: E402
-from vgs.experiments.palette import LINESTYLES, policy_color  # noqa: E402
 
 
 def load_episodes(run_dir: Path) -> tuple[pd.DataFrame, dict]:
@@ -31,7 +31,7 @@ def load_episodes(run_dir: Path) -> tuple[pd.DataFrame, dict]:
     table, meta = run_dir / "episodes.csv", run_dir / "run.json"
     if not table.exists() or not meta.exists():
         raise ConfigError("run_dir", f"{run_dir} holds no training run (episodes.csv, run.json)")
-    from vgs.runfolder import read_json, read_table
+    from vgs.runfolder.common import read_json, read_table
 
     return read_table(table), read_json(meta)
 
@@ -71,7 +71,7 @@ def plot_curves(run_dirs: list[Path], out: Path, window: int = 20) -> dict[str, 
     for run in run_dirs:
         df, meta = load_episodes(run)
         mode = meta["mode"]
-        # one colour per policy (vgs.experiments.palette); its runs told apart by line style
+        # one colour per policy (vgs.analysis.palette); its runs told apart by line style
         style = {"color": policy_color(mode),
                  "ls": LINESTYLES[seen.setdefault(mode, 0) % len(LINESTYLES)]}
         seen[mode] += 1

@@ -17,10 +17,10 @@ import numpy as np  # noqa: E402
 
 from vgs.assembly.episode import EpisodeRunner  # noqa: E402
 from vgs.config import ExperimentConfig  # noqa: E402
-from vgs.experiments.policies import load_trained_agent  # noqa: E402
-from vgs.experiments.trainfolder import episode_seed  # noqa: E402
 from vgs.grasping.agent import GraspAgent  # noqa: E402
 from vgs.grasping.preprocess import peg_mask  # noqa: E402
+from vgs.rollout.policies import load_trained_agent  # noqa: E402
+from vgs.runfolder.trainfolder import episode_seed  # noqa: E402
 
 ZOOM = 0.08  # half-width of the window around the peg [m]
 

@@ -12,8 +12,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from vgs.analysis.palette import policy_color  # noqa: E402
 from vgs.config import CONDITIONS  # noqa: E402
-from vgs.experiments.palette import policy_color  # noqa: E402
 
 LEARNED = ("baseline", "vgs")
 

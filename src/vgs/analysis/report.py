@@ -31,20 +31,14 @@ import matplotlib
 matplotlib.use("Agg")
 import pandas as pd  # noqa: E402
 
-from vgs.checkpoint import atomic_write_text  # noqa: E402
-from vgs.columns import rounded  # noqa: E402
-from vgs.config import CONDITIONS  # noqa: E402
-from vgs.errors import ConfigError  # noqa: E402
-from vgs.experiments.evaluate import summarize  # noqa: E402
-from vgs.experiments.layout import eval_tables, holds_network, train_folders  # noqa: E402
-from vgs.experiments.reportdoc import Doc  # noqa: E402
-from vgs.experiments.reportfigures import (  # noqa: E402
+from vgs.analysis.reportdoc import Doc  # noqa: E402
+from vgs.analysis.reportfigures import (  # noqa: E402
     CONDITION_TITLES,
     plot_grasp_positions,
     plot_times,
     policy_order,
 )
-from vgs.experiments.stats import (  # noqa: E402
+from vgs.analysis.stats import (  # noqa: E402
     ALIGN_GAIN,
     GAINS,
     MEAN_GAIN,
@@ -53,8 +47,14 @@ from vgs.experiments.stats import (  # noqa: E402
     TOTAL_GAIN,
     Gain,
     efficiency_gain,
+    summarize,
 )
-from vgs.runfolder import read_json, read_table  # noqa: E402
+from vgs.checkpoint import atomic_write_text  # noqa: E402
+from vgs.columns import rounded  # noqa: E402
+from vgs.config import CONDITIONS  # noqa: E402
+from vgs.errors import ConfigError  # noqa: E402
+from vgs.runfolder.common import read_json, read_table  # noqa: E402
+from vgs.runfolder.layout import eval_tables, holds_network, train_folders  # noqa: E402
 
 
 def load_paper_reference() -> dict[str, dict[str, Any]]:
@@ -111,7 +111,7 @@ def hosts_note(df: pd.DataFrame) -> str:
     a warning naming the evaluations whose episodes come from several hosts."""
     if "host_cpu" not in df.columns:
         return ""
-    from vgs.runfolder import engine_note, hosts_of
+    from vgs.runfolder.common import engine_note, hosts_of
 
     records = df[["host_cpu", "mujoco_version"]].to_dict("records")
     engine = engine_note(records)
@@ -231,7 +231,7 @@ def _training_rows(out: Path) -> list[list[str]]:
 
 def provenance_text(made: Any) -> str:
     """``vgs 0.1.0 (source 1a2b3c4d5e), MuJoCo 4.0.0, torch 2.13.0`` of a recorded
-    :func:`vgs.runfolder.provenance`; ``""`` for folders written before it was recorded."""
+    :func:`vgs.runfolder.common.provenance`; ``""`` for folders written before it was recorded."""
     if not isinstance(made, dict):
         return ""
     source = str(made.get("source_revision", "?"))
@@ -245,6 +245,12 @@ def build_report(out: Path, title: str | None = None) -> Path:
     """Write ``report.md``, ``report.html``, ``results.csv`` and figures into ``out``; the
     title defaults to the one ``vgs reproduce`` gives (the profile from ``reproduce.json``),
     so a re-run of ``vgs report`` keeps it.
+
+    The sections in order: how the run was made (:func:`_provenance_section`), what its times
+    are (:func:`_reading_section`), the headline and the verdicts (:func:`_headline_section`),
+    one section per condition (:func:`_condition_section`), where the policies grasp, the
+    training runs (:func:`_training_section`) and the grasp-position sweep
+    (:func:`_sweep_section`).
 
     Raises:
         ConfigError: If ``out`` holds no evaluation results.
@@ -261,6 +267,27 @@ def build_report(out: Path, title: str | None = None) -> Path:
                                              if meta.get("profile") else "")
     doc = Doc(out)
     doc.h(1, title)
+    _provenance_section(doc, out, df, meta)
+    _reading_section(doc, df)
+    _headline_section(doc, df, table, meta)
+    for condition in [c for c in CONDITIONS if c in set(table["condition"])]:
+        _condition_section(doc, df, table, condition, figures)
+    if PAPER["nominal"]:
+        doc.p("Paper means are derived from its totals (h x 3600 / 1000).")
+
+    doc.h(2, "Where the policies grasp")
+    doc.img(plot_grasp_positions(df, figures / "grasp_positions.png"),
+            "Realised grasp offset along the peg axis from the centre of mass, test episodes")
+
+    _training_section(doc, out, figures)
+    _sweep_section(doc, out)
+    atomic_write_text(out / "report.md", doc.markdown())
+    atomic_write_text(out / "report.html", doc.html(title))
+    return out / "report.md"
+
+
+def _provenance_section(doc: Doc, out: Path, df: pd.DataFrame, meta: dict[str, Any]) -> None:
+    """How the run was made: command, machine, revision, engine, wall times, shortcuts."""
     tested = [provenance_text(read_json(m).get("provenance"))
               for m in sorted((out / "eval").glob("**/meta.json"))]
     tested_text = "Test episodes made with " + "; ".join(dict.fromkeys(t for t in tested if t))
@@ -306,6 +333,10 @@ def build_report(out: Path, title: str | None = None) -> Path:
             doc.p("Training shortcuts (the same rewards, updates and networks as whole "
                   "episodes; docs/training.md): " + "; ".join(shortcuts) + ". The training "
                   "tables' assembly times are absent or censored there; the tests run whole.")
+
+
+def _reading_section(doc: Doc, df: pd.DataFrame) -> None:
+    """What the times are, and the hosts that made them."""
     doc.p("All times are **simulated** seconds of successful assemblies in our MuJoCo cell "
           "(UR5 + RG2, F/T-driven compliance). The paper's absolute times come from its own "
           "simulator and controller; compare the gains, spreads and the direction of effects, "
@@ -316,6 +347,10 @@ def build_report(out: Path, title: str | None = None) -> Path:
     if host_note:
         doc.p(host_note)
 
+
+def _headline_section(doc: Doc, df: pd.DataFrame, table: pd.DataFrame,
+                      meta: dict[str, Any]) -> None:
+    """The gains of VGS per condition in one table, then a sentence per condition."""
     head_rows = []
     for condition in [c for c in CONDITIONS if c in set(table["condition"])]:
         part = table[table["condition"] == condition].set_index("policy")
@@ -358,62 +393,60 @@ def build_report(out: Path, title: str | None = None) -> Path:
         doc.p("What this run measured:")
         doc.items(verdicts)
 
-    for condition in [c for c in CONDITIONS if c in set(table["condition"])]:
-        part = table[table["condition"] == condition].set_index("policy")
-        policies = list(part.index)
-        doc.h(2, CONDITION_TITLES[condition])
-        header = ["metric", *(f"{p} (ours)" for p in policies), "baseline (paper)",
-                  "VGS (paper)"]
 
-        def row(label: str, key: str, digits: int, paper_key: str | None = None,
-                part: pd.DataFrame = part, policies: list[str] = policies,
-                condition: str = condition) -> list[str]:
-            pk = paper_key or key
-            return [label, *(_f(part.loc[p, key], digits) for p in policies),
-                    _paper(condition, pk, 0, digits), _paper(condition, pk, 1, digits)]
+def _condition_section(doc: Doc, df: pd.DataFrame, table: pd.DataFrame, condition: str,
+                       figures: Path) -> None:
+    """One condition: every policy's numbers beside the paper's, its times, its failures."""
+    part = table[table["condition"] == condition].set_index("policy")
+    policies = list(part.index)
+    doc.h(2, CONDITION_TITLES[condition])
+    header = ["metric", *(f"{p} (ours)" for p in policies), "baseline (paper)",
+              "VGS (paper)"]
 
-        rows = [
-            row("test assemblies", "episodes", 0),
-            [*row("success rate", "success_rate", 3)[:-2], "-", "-"],
-            [*row("grasp success rate", "grasp_success_rate", 3)[:-2], "-", "-"],
-            row("total assembly time of the successes [h]", "time_total_h", 2),
-            row("total time of all assembly attempts, failed ones until given up [h]",
-                "time_all_h", 2, paper_key="time_total_h"),
-            row("mean [s]", "time_mean_s", 2),
-            [*row("median [s]", "time_median_s", 2)[:-2], "-", "-"],
-            row("min [s]", "time_min_s", 1),
-            row("max [s]", "time_max_s", 1),
-            row("standard deviation [s]", "time_std_s", 4),
-            [*row("assembly time per assembled peg, failed attempts included [s]",
-                  "time_per_assembled_s", 1)[:-2], "-", "-"],
-            [*row("mean grasp offset from the COM [mm]", "abs_grasp_offset_mean_mm", 1)[:-2],
-             "-", "-"],
-            *([label,
-               *(Gain(part.loc[p, f"{m.name}_pct"], part.loc[p, f"{m.name}_ci_low"],
-                      part.loc[p, f"{m.name}_ci_high"], True, 0).text()
-                 if p != "baseline" else "-" for p in policies),
-               "-", f"{PAPER[condition]['gain']:+.2f}" if m is TOTAL_GAIN else "-"]
-              for m, label in ((TOTAL_GAIN, "gain in total time [%] (95 % CI)"),
-                               (SUCCESS_TOTAL_GAIN, "gain in total time without failed "
-                                                    "attempts [%]"),
-                               (MEAN_GAIN, "gain on the mean time [%]"),
-                               (ALIGN_GAIN, "gain in the alignment phase [%]"))),
-        ]
-        doc.table(header, rows)
-        fig = plot_times(df, condition, figures / f"times_{condition}.png")
-        doc.img(fig, f"Assembly times, {CONDITION_TITLES[condition]}")
-        reasons = df[(df["condition"] == condition) & ~df["assembly_success"].astype(bool)]
-        if len(reasons):
-            counts = reasons.groupby(["policy", "failure_reason"]).size()
-            doc.p("Failures: " + "; ".join(f"{p} {r} x{n}" for (p, r), n in counts.items())
-                  + ".")
-    if PAPER["nominal"]:
-        doc.p("Paper means are derived from its totals (h x 3600 / 1000).")
+    def row(label: str, key: str, digits: int, paper_key: str | None = None) -> list[str]:
+        pk = paper_key or key
+        return [label, *(_f(part.loc[p, key], digits) for p in policies),
+                _paper(condition, pk, 0, digits), _paper(condition, pk, 1, digits)]
 
-    doc.h(2, "Where the policies grasp")
-    doc.img(plot_grasp_positions(df, figures / "grasp_positions.png"),
-            "Realised grasp offset along the peg axis from the centre of mass, test episodes")
+    rows = [
+        row("test assemblies", "episodes", 0),
+        [*row("success rate", "success_rate", 3)[:-2], "-", "-"],
+        [*row("grasp success rate", "grasp_success_rate", 3)[:-2], "-", "-"],
+        row("total assembly time of the successes [h]", "time_total_h", 2),
+        row("total time of all assembly attempts, failed ones until given up [h]",
+            "time_all_h", 2, paper_key="time_total_h"),
+        row("mean [s]", "time_mean_s", 2),
+        [*row("median [s]", "time_median_s", 2)[:-2], "-", "-"],
+        row("min [s]", "time_min_s", 1),
+        row("max [s]", "time_max_s", 1),
+        row("standard deviation [s]", "time_std_s", 4),
+        [*row("assembly time per assembled peg, failed attempts included [s]",
+              "time_per_assembled_s", 1)[:-2], "-", "-"],
+        [*row("mean grasp offset from the COM [mm]", "abs_grasp_offset_mean_mm", 1)[:-2],
+         "-", "-"],
+        *([label,
+           *(Gain(part.loc[p, f"{m.name}_pct"], part.loc[p, f"{m.name}_ci_low"],
+                  part.loc[p, f"{m.name}_ci_high"], True, 0).text()
+             if p != "baseline" else "-" for p in policies),
+           "-", f"{PAPER[condition]['gain']:+.2f}" if m is TOTAL_GAIN else "-"]
+          for m, label in ((TOTAL_GAIN, "gain in total time [%] (95 % CI)"),
+                           (SUCCESS_TOTAL_GAIN, "gain in total time without failed "
+                                                "attempts [%]"),
+                           (MEAN_GAIN, "gain on the mean time [%]"),
+                           (ALIGN_GAIN, "gain in the alignment phase [%]"))),
+    ]
+    doc.table(header, rows)
+    fig = plot_times(df, condition, figures / f"times_{condition}.png")
+    doc.img(fig, f"Assembly times, {CONDITION_TITLES[condition]}")
+    reasons = df[(df["condition"] == condition) & ~df["assembly_success"].astype(bool)]
+    if len(reasons):
+        counts = reasons.groupby(["policy", "failure_reason"]).size()
+        doc.p("Failures: " + "; ".join(f"{p} {r} x{n}" for (p, r), n in counts.items())
+              + ".")
 
+
+def _training_section(doc: Doc, out: Path, figures: Path) -> None:
+    """The training runs: their table, learning curves and Q heat maps (paper Fig. 7)."""
     runs = [r for r in train_folders(out) if (r / "episodes.csv").exists()]
     if runs:
         doc.h(2, "Training")
@@ -421,13 +454,13 @@ def build_report(out: Path, title: str | None = None) -> Path:
         doc.table(["run", "episodes", "grasp success", "assembly success (last 20 %)",
                    "mean |offset| last 20 % [mm]", "threshold [s]", "delta-Q converged"],
                   _training_rows(out))
-        from vgs.experiments.curves import plot_curves
+        from vgs.analysis.curves import plot_curves
 
         curves = figures / "learning_curves.png"
         plot_curves(runs, curves, window=max(5, min(50, len(read_table(
             runs[0] / "episodes.csv")) // 8)))
         doc.img(curves, "Learning curves (moving means) and grasp offsets during training")
-        from vgs.experiments.heatmap import plot_heatmaps
+        from vgs.analysis.heatmap import plot_heatmaps
 
         for run in runs:
             if holds_network(run):
@@ -435,6 +468,9 @@ def build_report(out: Path, title: str | None = None) -> Path:
                 doc.img(fig, f"Q heat maps of {run.name}, untrained beside trained "
                              "(paper Fig. 7)")
 
+
+def _sweep_section(doc: Doc, out: Path) -> None:
+    """The grasp-position sweep of the reproduction, if it ran one."""
     sweep_png = out / "sweep" / "sweep.png"
     if sweep_png.exists():
         doc.h(2, "Grasp-position sweep")
@@ -447,10 +483,6 @@ def build_report(out: Path, title: str | None = None) -> Path:
             if rows:
                 doc.table(["offset [mm]", "success", "mean time [s]", "std [s]"], rows)
         doc.img(sweep_png, "Assembly time against a fixed grasp offset (with eq. 2, 3)")
-
-    atomic_write_text(out / "report.md", doc.markdown())
-    atomic_write_text(out / "report.html", doc.html(title))
-    return out / "report.md"
 
 
 

@@ -121,9 +121,9 @@ def load_trained_agent(run_dir: Path, device: str = "cpu", field: str = "policy"
         CorruptFileError: If ``run.json`` cannot be read, or the policy files do not fit it;
             :class:`vgs.errors.CheckpointError` if the checkpoint is refused.
     """
-    from vgs.experiments.trainfolder import load_checkpoint
     from vgs.grasping.agent import GraspAgent
-    from vgs.runfolder import read_json
+    from vgs.runfolder.common import read_json
+    from vgs.runfolder.trainfolder import load_checkpoint
     from vgs.validate import check_config
 
     meta_path, ckpt = run_dir / "run.json", run_dir / "checkpoint.pt"
@@ -151,7 +151,7 @@ def finished_as_policy(out: Path, total: int) -> bool:
         CorruptFileError: If that network was trained for fewer than ``total`` episodes (a
             longer run needs the checkpoint, which such a folder no longer has).
     """
-    from vgs.runfolder import read_json
+    from vgs.runfolder.common import read_json
 
     if (out / "checkpoint.pt").exists() or not (out / POLICY_WEIGHTS).exists():
         return False
@@ -180,7 +180,7 @@ def _load_policy_files(folder: Path, meta: dict[str, Any], agent: Any, device: s
 
     import torch
 
-    from vgs.runfolder import read_json
+    from vgs.runfolder.common import read_json
 
     desc_path, weights_path = folder / POLICY_DESCRIPTION, folder / POLICY_WEIGHTS
     if not desc_path.exists():
@@ -310,7 +310,7 @@ def policy_digest(spec: str, policy: EvalPolicy) -> str:
 def policy_label(spec: str) -> str:
     """Short name of a policy spec: the run's mode for a run folder, else the spec."""
     if is_run_dir(spec):
-        from vgs.runfolder import read_json
+        from vgs.runfolder.common import read_json
 
         return str(read_json(Path(spec) / "run.json").get("mode"))
     return spec

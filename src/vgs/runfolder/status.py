@@ -25,9 +25,9 @@ from vgs import checkpoint
 from vgs.columns import as_bool
 from vgs.config import ExperimentConfig, from_dict
 from vgs.errors import ConfigError, CorruptFileError
-from vgs.experiments.journal import read_journal
-from vgs.experiments.layout import eval_jobs, train_runs
-from vgs.runfolder import engine_note, hosts_of, read_json
+from vgs.runfolder.common import engine_note, hosts_of, read_json
+from vgs.runfolder.journal import read_journal
+from vgs.runfolder.layout import eval_jobs, train_runs
 
 RATE_WINDOW = 50  # episodes behind a rate
 
@@ -143,8 +143,8 @@ def train_progress(folder: Path, name: str | None = None) -> Progress:
         notes.append(engine)
     if rows:
         window = rows[-RATE_WINDOW:]
-        grasp = sum(_flag(r.get("grasp_success")) for r in window) / len(window)
-        ok = sum(_flag(r.get("assembly_success")) for r in window) / len(window)
+        grasp = sum(flag_count(r.get("grasp_success")) for r in window) / len(window)
+        ok = sum(flag_count(r.get("assembly_success")) for r in window) / len(window)
         notes.append(f"last {len(window)}: grasp {grasp:.2f}, assembly {ok:.2f}")
     last = _age(table, meta_path, folder / "checkpoint.pt") if rows else None
     return Progress(name, done, total, finished, _mean(walls), last, "; ".join(notes))
@@ -206,7 +206,7 @@ def _number(value: object) -> float | None:
     return number if number == number else None
 
 
-def _flag(value: object) -> int:
+def flag_count(value: object) -> int:
     """A boolean cell of ``episodes.csv``: ``True``/``False`` (0/1 in tables written before
     booleans were stored as booleans); anything else counts 0."""
     return int(bool(as_bool(value)))

@@ -145,7 +145,7 @@ def read_journal(path: Path, plan: Sequence[Any] | None = None
 
     Args:
         path: The journal.
-        plan: The planned episodes (:class:`vgs.experiments.evaluate.EpisodeTask`); each
+        plan: The planned episodes (:class:`vgs.rollout.episodepool.EpisodeTask`); each
             row must match the episode of its index (episode seed, peg mass and length).
             None checks the rows' form only (``vgs status``).
 

@@ -21,7 +21,7 @@ from vgs.config import ExperimentConfig, to_dict
 from vgs.errors import CheckpointError, ConfigError, CorruptFileError, RunMismatchError
 from vgs.grasping.agent import DeltaQMonitor, GraspAgent
 from vgs.grasping.replay import ReplayBuffer, maps_digest
-from vgs.runfolder import check_request, host, provenance, read_json, source_revision
+from vgs.runfolder.common import check_request, host, provenance, read_json, source_revision
 
 # Column vocabulary of vgs.columns; booleans are written True/False (0/1 before 2026-12).
 CSV_COLUMNS = (
@@ -228,7 +228,7 @@ def load_checkpoint(path: Path, agent: GraspAgent, replay: ReplayBuffer | None =
 
 
 def git_revision() -> str:
-    """The source revision (:func:`vgs.runfolder.source_revision`): a commit, or
+    """The source revision (:func:`vgs.runfolder.common.source_revision`): a commit, or
     ``"installed package"`` outside a checkout."""
     return source_revision()
 

@@ -1,7 +1,7 @@
 """One whole episode for people to look at: look, grasp, assemble, with the signals traced.
 
 The grasp comes from the centre heuristic (with an ``offset`` along the peg), or from any
-evaluation policy (:func:`vgs.experiments.policies.load_policy`: ``center``, ``random``, a
+evaluation policy (:func:`vgs.rollout.policies.load_policy`: ``center``, ``random``, a
 training run or policy folder), drawn as ``vgs evaluate`` draws it for the same episode seed.
 :func:`demo_video` draws the traced episode afterwards, from its recorded states, as a video
 with the phase and the wrist F/T reading written on every frame and, beside it, what the
@@ -19,7 +19,7 @@ import numpy as np
 
 from vgs.assembly.episode import EpisodeRunner, GraspCommand, offset_policy
 from vgs.assembly.record import PHASES, EpisodeRecord
-from vgs.config import CellConfig, ExperimentConfig, PegConfig
+from vgs.config import CellConfig, ExperimentConfig, PegConfig, eval_scenes
 from vgs.control.robot import Trace
 from vgs.errors import ConfigError
 from vgs.sim.camera import Heightmap
@@ -77,7 +77,7 @@ def run_demo(cfg: ExperimentConfig, seed: int, offset: float = 0.0, policy: str 
         seed: Episode seed.
         offset: Grasp offset along the visible peg axis [m] for the centre heuristic (no
             ``policy``); 0 is the centre.
-        policy: A policy spec (:func:`vgs.experiments.policies.load_policy`); it chooses as in
+        policy: A policy spec (:func:`vgs.rollout.policies.load_policy`); it chooses as in
             ``vgs evaluate`` (its generator seeded ``[seed, 2]``), so an evaluation's episode
             of that seed and peg is the same episode.
         peg: The episode's peg (default: the configured one).
@@ -96,7 +96,7 @@ def run_demo(cfg: ExperimentConfig, seed: int, offset: float = 0.0, policy: str 
         if offset != 0:
             raise ConfigError("offset", "applies to the centre heuristic; leave it out with "
                                         "--policy")
-        from vgs.experiments.policies import load_policy
+        from vgs.rollout.policies import load_policy
 
         chooser = load_policy(policy, cfg)
         name = str(getattr(chooser, "label", policy))
@@ -150,25 +150,6 @@ def format_report(record: EpisodeRecord) -> str:
         f"insertion depth {record.insertion_depth_mm:.1f} mm",
     ]
     return "\n".join(lines)
-
-
-def frame_indices(times: np.ndarray, fps: float, speed: float) -> np.ndarray:
-    """Indices of the ticks shown as video frames: one every ``speed / fps`` simulated seconds.
-
-    Args:
-        times: Simulated time of each recorded tick [s], increasing.
-        fps: Video frames per second.
-        speed: Simulated seconds per second of video.
-
-    Returns:
-        For each frame, the index of the last tick at or before its time.
-    """
-    if times.size == 0:
-        return np.zeros(0, dtype=int)
-    step = speed / fps
-    frame_times = times[0] + step * np.arange(int((times[-1] - times[0]) / step) + 1)
-    return np.clip(np.searchsorted(times, frame_times + 1e-9, side="right") - 1, 0,
-                   times.size - 1)
 
 
 def frame_text(result: DemoResult, index: int, speed: float) -> list[str]:
@@ -260,7 +241,7 @@ def demo_video(result: DemoResult, cell: CellConfig, path: str | Path, fps: floa
             positive, ``video.size`` on a bad size.
         GLUnavailableError: If no OpenGL context can be made.
     """
-    from vgs.render import SceneRenderer, annotate, write_video
+    from vgs.render import SceneRenderer, annotate, frame_indices, write_video
 
     if not (math.isfinite(fps) and fps > 0):
         raise ConfigError("video.fps", f"must be > 0, got {fps}")
@@ -297,7 +278,8 @@ def evaluation_videos(cfg: ExperimentConfig, spec: Any, out: Path, count: int,
 
     Args:
         cfg: The evaluation's configuration.
-        spec: Its :class:`vgs.experiments.evaluate.EvalSpec`.
+        spec: Its :class:`vgs.experiments.evaluate.EvalSpec` (policy, condition, seed): the
+            scenes are the condition's test scenes (:func:`vgs.config.eval_scenes`).
         out: Its folder.
         count: Episodes to draw (the first ones, in index order).
         rows: The evaluation's table (``index``, ``assembly_time_s``); an episode whose second
@@ -310,7 +292,6 @@ def evaluation_videos(cfg: ExperimentConfig, spec: Any, out: Path, count: int,
     import sys
     from dataclasses import replace
 
-    from vgs.experiments.evaluate import plan_episodes
     from vgs.render import require_video_writer
 
     suffix = ".mp4"
@@ -319,7 +300,7 @@ def evaluation_videos(cfg: ExperimentConfig, spec: Any, out: Path, count: int,
     except ConfigError:
         suffix = ".gif"
     written = []
-    for task in plan_episodes(cfg, spec)[:max(0, count)]:
+    for task in eval_scenes(cfg.cell.peg, cfg.eval, spec.condition, spec.seed, max(0, count)):
         result = run_demo(cfg, task.seed, policy=spec.policy, peg=task.peg)
         if rows is not None:
             row = rows[rows["index"] == task.index]

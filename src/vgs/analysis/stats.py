@@ -1,9 +1,10 @@
-"""The standard deviations of the results tables, in one place.
+"""The statistics of the results tables, in one place: the summary of an evaluation table
+(:func:`summarize`), the standard deviations, the efficiency gains and their intervals.
 
 Two conventions are in use, each because numbers published under ``docs/results`` were computed
 with it and must re-derive unchanged from their stored rows:
 
-* :func:`sample_std` (divisor n - 1): the evaluation tables. ``evaluate.summarize``
+* :func:`sample_std` (divisor n - 1): the evaluation tables. :func:`summarize`
   (``summary.json``, ``vgs evaluate``), the report's tables and ``results.csv``, and the spread
   of the gain between training seeds (``vgs seeds``).
 * :func:`population_std` (divisor n): the grasp-position sweep. ``sweep.summarize``
@@ -30,6 +31,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -97,7 +99,7 @@ def total_gain_pct(tb: np.ndarray, ob: np.ndarray, tv: np.ndarray, ov: np.ndarra
 
     ``S = sum_i t_i`` over every test, a failed attempt with its time until it was given up and
     a missed grasp (time NaN) with none, as ``time_all_h`` of
-    :func:`vgs.experiments.evaluate.summarize`. A policy that fails often pays for each failure
+    :func:`summarize`. A policy that fails often pays for each failure
     here, which the mean of the successes (:func:`gain_pct`) does not see. The success flags
     are not used; they keep the signature of :func:`gain_pct`.
     """
@@ -189,3 +191,38 @@ def efficiency_gain(base: pd.DataFrame, vgs: pd.DataFrame, resamples: int = BOOT
     gains = gains[np.isfinite(gains)]
     low, high = (np.percentile(gains, [2.5, 97.5]) if gains.size else (math.nan, math.nan))
     return Gain(value, float(low), float(high), paired, len(base))
+
+
+def summarize(df: pd.DataFrame) -> dict[str, Any]:
+    """Success rates and assembly-time statistics of one evaluation table.
+
+    The ``time_*`` statistics are those of the successful assemblies (the paper's measure);
+    ``time_all_h`` is the simulated assembly time of all episodes, failed attempts included
+    (each until it was given up; a missed grasp costs none): the paper's measure, the total time
+    of its tests, every one of which assembled. ``time_per_assembled_s`` is that time divided by
+    the number of pegs assembled.
+    """
+    ok = df[df["assembly_success"].astype(bool)]
+    times = ok["assembly_time_s"].to_numpy(float)
+    attempts = float(np.nansum(df["assembly_time_s"].to_numpy(float)))
+
+    def stat(fn: Callable[[np.ndarray], Any]) -> float | None:
+        return float(fn(times)) if times.size else None
+
+    return {
+        "episodes": int(len(df)), "grasp_success_rate": float(df["grasp_success"].mean()),
+        "success_rate": float(len(ok) / max(len(df), 1)), "successes": int(len(ok)),
+        "time_total_h": float(times.sum() / 3600.0), "time_mean_s": stat(np.mean),
+        "time_std_s": stat(lambda t: sample_std(t) if t.size > 1 else 0.0),
+        "time_min_s": stat(np.min), "time_max_s": stat(np.max),
+        "time_median_s": stat(np.median),
+        # Throughput: every assembly attempt's simulated time (a failed one until it was given
+        # up; a missed grasp costs none) over the pegs assembled.
+        "time_all_h": attempts / 3600.0,
+        "time_per_assembled_s": attempts / len(ok) if len(ok) else None,
+        "abs_grasp_offset_mean_mm": float(np.nanmean(np.abs(df["grasp_offset_mm"])))
+        if df["grasp_offset_mm"].notna().any() else None,
+        "failure_reasons": {str(k): int(v) for k, v in
+                            df.loc[~df["assembly_success"].astype(bool), "failure_reason"]
+                            .value_counts().items()},
+    }

@@ -42,7 +42,7 @@ class EvalJob:
 
     Attributes:
         label: Policy label in the report (``baseline``, ``vgs``, ``center`` ...).
-        policy: Policy spec for :func:`vgs.experiments.policies.load_policy` (a run folder or
+        policy: Policy spec for :func:`vgs.rollout.policies.load_policy` (a run folder or
             a heuristic's name).
         condition: ``nominal``, ``mass`` or ``length``.
         folder: ``DIR/eval/<label>/s<seed>/<condition>``.

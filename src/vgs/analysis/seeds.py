@@ -1,7 +1,7 @@
 """Across training seeds: the efficiency gain of each trained pair and their mean.
 
 One training seed gives one baseline and one VGS network; the gain measured on its test
-episodes carries the test-episode noise (the paired bootstrap of :mod:`vgs.experiments.report`)
+episodes carries the test-episode noise (the paired bootstrap of :mod:`vgs.analysis.report`)
 but not the spread between training runs, which can be larger (one seed's baseline may learn to
 grasp, another's not). ``vgs seeds DIR [DIR ...] --out DEST`` gathers the evaluation tables of
 several reproduce folders (or their published copies under ``docs/results``) and writes:
@@ -25,7 +25,7 @@ With two or three seeds the run level has few distinct draws, so the interval is
 table also gives the spread between seeds (sample standard deviation of ``g_s``).
 
 The same statistics on the paper's own measure, the total simulated time of all test attempts
-(``h_s = 100 (S_base,s - S_vgs,s) / S_base,s``, :func:`vgs.experiments.stats.total_gain_pct`):
+(``h_s = 100 (S_base,s - S_vgs,s) / S_base,s``, :func:`vgs.analysis.stats.total_gain_pct`):
 the paper's tests all assembled, so there the two measures coincide; here a policy that often
 fails pays each failed attempt in ``h_s``, which ``g_s`` does not see.
 """
@@ -43,14 +43,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from vgs.columns import rounded  # noqa: E402
-from vgs.config import CONDITIONS  # noqa: E402
-from vgs.errors import ConfigError  # noqa: E402
-from vgs.experiments.evaluate import summarize  # noqa: E402
-from vgs.experiments.palette import GAIN_COLORS  # noqa: E402
-from vgs.experiments.report import PAPER, load_results  # noqa: E402
-from vgs.experiments.reportfigures import CONDITION_TITLES, LEARNED  # noqa: E402
-from vgs.experiments.stats import (  # noqa: E402
+from vgs.analysis.palette import GAIN_COLORS  # noqa: E402
+from vgs.analysis.report import PAPER, load_results  # noqa: E402
+from vgs.analysis.reportfigures import CONDITION_TITLES, LEARNED  # noqa: E402
+from vgs.analysis.stats import (  # noqa: E402
     ALIGN_GAIN,
     BOOTSTRAP_RESAMPLES,
     GAINS,
@@ -60,9 +56,13 @@ from vgs.experiments.stats import (  # noqa: E402
     Measure,
     efficiency_gain,
     sample_std,
+    summarize,
     t_interval,
     time_arrays,
 )
+from vgs.columns import rounded  # noqa: E402
+from vgs.config import CONDITIONS  # noqa: E402
+from vgs.errors import ConfigError  # noqa: E402
 
 # Each gain of stats.GAINS gives the columns <name>_pct, <name>_ci_low, <name>_ci_high, and on
 # the mean row <name>_sd_between_seeds, <name>_t_low, <name>_t_high, seeds_with_positive_<name>.
@@ -128,7 +128,7 @@ def mean_gain(pairs: list[tuple[pd.DataFrame, pd.DataFrame]],
         resamples: Bootstrap resamples.
         seed: Seed of the resampling.
         measure: The gain of one run on given scenes: ``MEAN_GAIN`` (mean of the successes)
-            or ``TOTAL_GAIN`` (total time of all attempts), :mod:`vgs.experiments.stats`.
+            or ``TOTAL_GAIN`` (total time of all attempts), :mod:`vgs.analysis.stats`.
 
     Returns:
         ``(mean gain, low, high)`` in percent; the interval is NaN when a run has fewer than
@@ -301,7 +301,7 @@ def seeds_markdown(table: pd.DataFrame, folders: list[Path], dest: Path, figure:
     """The tables of :func:`seeds_table` as Markdown."""
     lines = ["# VGS against the baseline, across training seeds", "",
              "Written by `vgs seeds " + " ".join(str(f) for f in folders) + f" --out {dest}` "
-             "(module `vgs.experiments.seeds`). Each training run trains one baseline and one "
+             "(module `vgs.analysis.seeds`). Each training run trains one baseline and one "
              "VGS network; both meet the same test scenes. Gain: (T_baseline - T_VGS) / "
              "T_baseline on the mean time of successful assemblies, 95 % interval from the "
              "paired bootstrap over test episodes; the mean row averages the runs' gains, its "

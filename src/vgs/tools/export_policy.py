@@ -24,7 +24,7 @@
 ``vgs export-policy RUN --out FOLDER`` (a path without a file suffix) writes a **policy folder**:
 ``FOLDER/policy.pt``, ``FOLDER/policy.json`` and a copy of the run's ``run.json``, which
 ``vgs evaluate --policy FOLDER`` and ``vgs heatmap FOLDER`` load without the checkpoint (the
-final networks a published run commits, :mod:`vgs.experiments.policies`).
+final networks a published run commits, :mod:`vgs.rollout.policies`).
 
 docs/grasping.md ("Using a trained network without vgs") gives the plain-torch snippet that
 turns a heightmap into the Q maps with them; ``tests/test_export_policy.py`` checks that it
@@ -41,11 +41,11 @@ import torch
 from torch import nn
 
 from vgs.errors import ConfigError
-from vgs.experiments.policies import POLICY_FORMAT, POLICY_WEIGHTS, load_trained_agent
-from vgs.grasping.densenet import _DenseBlock
+from vgs.grasping.densenet import DenseBlock
 from vgs.grasping.network import GraspQNetwork, padded_size
 from vgs.grasping.preprocess import IMAGENET_MEAN, IMAGENET_STD
 from vgs.jsonsafe import dumps
+from vgs.rollout.policies import POLICY_FORMAT, POLICY_WEIGHTS, load_trained_agent
 
 FORMAT = POLICY_FORMAT
 WEIGHT_SUFFIXES = (".pt", ".pth")
@@ -74,7 +74,7 @@ def layer_ops(module: nn.Module, prefix: str) -> list[list[Any]]:
     Raises:
         ConfigError: ``policy`` on a layer the description has no kind for.
     """
-    if isinstance(module, _DenseBlock):
+    if isinstance(module, DenseBlock):
         return [["dense", f"{prefix}.{name}", layer_ops(layer, f"{prefix}.{name}")]
                 for name, layer in module.items()]
     if isinstance(module, nn.Conv2d):
@@ -176,7 +176,7 @@ def export_policy(run_dir: Path, out: Path) -> PolicyExport:
             ``run.json``,
             ``policy`` if the folder holds no run.
     """
-    from vgs.runfolder import read_json
+    from vgs.runfolder.common import read_json
 
     folder = out if out.is_dir() or not out.suffix else None
     if folder is None and out.suffix.lower() not in WEIGHT_SUFFIXES:

@@ -9,8 +9,8 @@ from pathlib import Path
 
 from vgs.checkpoint import MAX_JOURNAL_BYTES, atomic_write_bytes, read_regular
 from vgs.errors import ConfigError
-from vgs.experiments.layout import holds_network, train_folders
-from vgs.runfolder import read_json
+from vgs.runfolder.common import read_json
+from vgs.runfolder.layout import holds_network, train_folders
 
 PUBLISH_POLICY_LIMIT = 10_000_000  # bytes: final networks a published run commits (light backbone)
 
@@ -27,7 +27,7 @@ def publish(out: Path, dest: Path) -> list[Path]:
     the final networks of each finished training run as a policy folder ``dest/<mode>/``
     (``dest/<run>/`` when a mode has several runs): ``policy.pt``, ``policy.json`` and
     ``run.json``, which ``vgs evaluate --policy dest/<mode>`` loads on a fresh clone
-    (:func:`vgs.experiments.export_policy.export_policy`). Networks over
+    (:func:`vgs.tools.export_policy.export_policy`). Networks over
     ``PUBLISH_POLICY_LIMIT`` (a DenseNet-121 policy) are not published, with a warning.
 
     Returns:
@@ -52,7 +52,7 @@ def publish(out: Path, dest: Path) -> list[Path]:
     finished = [run for run in train_folders(out)
                 if holds_network(run) and (run / "convergence.json").exists()]
     if finished:
-        from vgs.experiments.export_policy import export_policy
+        from vgs.tools.export_policy import export_policy
 
         modes = [str(read_json(run / "run.json").get("mode")) for run in finished]
         for run, mode in zip(finished, modes, strict=True):
