@@ -1,8 +1,10 @@
 """Q-value heat maps over the heightmap, untrained beside trained (paper Figure 7).
 
 The untrained network is the run's network at its initial parameters (same seed, no updates);
-the trained one is loaded from the run's checkpoint. Each panel shows ``max_k Q(k, i, j)`` over
-the rotations, drawn over the colour heightmap, and marks the greedy grasp on the peg.
+the trained one is loaded from the run's checkpoint. Each panel shows the Q map of the position
+action (``network.action = position``: one map, jaws across the perceived axis), or
+``max_k Q(k, i, j)`` over the rotations of the rotation action, drawn over the colour heightmap,
+and marks the greedy grasp on the peg.
 """
 
 from __future__ import annotations
@@ -40,6 +42,7 @@ def plot_heatmaps(run_dir: Path, out: Path, scenes: int = 2, seed: int = 12345) 
     """Write the figure: one row per scene, untrained and trained Q maps side by side."""
     cfg, mode, untrained, trained = load_run(run_dir)
     runner = EpisodeRunner(cfg)
+    label = "Q" if cfg.network.action == "position" else "max over rotations of Q"
     fig, axes = plt.subplots(scenes, 2, figsize=(8, 4 * scenes), squeeze=False)
     for s in range(scenes):
         hm = runner.observe(episode_seed(seed, s))
@@ -65,7 +68,7 @@ def plot_heatmaps(run_dir: Path, out: Path, scenes: int = 2, seed: int = 12345) 
             ax.set_title(f"{title} ({mode})")
             ax.set_xlabel("x [m]")
             ax.set_ylabel("y [m]")
-            fig.colorbar(im, ax=ax, fraction=0.046, label="max over rotations of Q")
+            fig.colorbar(im, ax=ax, fraction=0.046, label=label)
     fig.suptitle("Grasp Q values on the peg (cross: greedy grasp)")
     fig.tight_layout()
     out.parent.mkdir(parents=True, exist_ok=True)
