@@ -116,6 +116,19 @@ def test_reproduction_folder(tmp_path: Path) -> None:
     assert "not started" in text and "report: not written yet" in text
 
 
+def test_reproduction_with_a_training_run_not_started(tmp_path: Path) -> None:
+    """A carried reproduction whose second training run has not begun (its folder absent)."""
+    cfg = _config()
+    out = tmp_path / "repro"
+    out.mkdir()
+    (out / "reproduce.json").write_text(json.dumps({"profile": "smoke", "config": to_dict(cfg)}))
+    runs = train_runs(cfg, out)
+    _train_run(runs[0].folder, cfg, [1.0] * 10, converged=True)
+    train = dict(folder_status(out))["train"]
+    assert [(p.done, p.total, p.finished) for p in train] == [(10, 10, True), (0, 10, False)]
+    assert "0/10    not started" in format_status(out)
+
+
 def test_not_a_run_folder(tmp_path: Path) -> None:
     with pytest.raises(ConfigError, match="is not a reproduction"):
         folder_status(tmp_path)

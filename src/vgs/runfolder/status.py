@@ -96,17 +96,25 @@ def _mean(values: list[float]) -> float | None:
     return sum(values) / len(values) if values else None
 
 
-def train_progress(folder: Path, name: str | None = None) -> Progress:
+def train_progress(folder: Path, name: str | None = None, total: int | None = None
+                   ) -> Progress:
     """Progress of a training run folder (``run.json``, ``episodes.csv``).
 
+    Args:
+        folder: The training run's folder.
+        name: Name to show (default: the folder's name).
+        total: Planned episodes of a run a reproduction plans; its folder may not exist yet.
+
     Raises:
-        ConfigError: If ``folder`` holds no ``run.json`` nor ``episodes.csv`` and does not exist.
+        ConfigError: If ``folder`` does not exist and no ``total`` plans it.
     """
     name = name or folder.name
     meta_path, table = folder / "run.json", folder / "episodes.csv"
     if not meta_path.exists():
         if folder.exists():
-            return Progress(name, 0, 0, False, None, None, "no run.json")
+            return Progress(name, 0, total or 0, False, None, None, "no run.json")
+        if total is not None:
+            return Progress(name, 0, total, False, None, None)
         raise ConfigError("dir", f"{folder} does not exist")
     meta = read_json(meta_path)
     cfg = _config(meta_path, meta.get("config"))
@@ -227,8 +235,8 @@ def folder_status(path: Path) -> list[tuple[str, list[Progress]]]:
     if (path / "reproduce.json").exists():
         meta = read_json(path / "reproduce.json")
         cfg = _config(path / "reproduce.json", meta.get("config"))
-        train = [train_progress(run.folder, str(run.folder.relative_to(path)))
-                 for run in train_runs(cfg, path)]
+        train = [train_progress(run.folder, str(run.folder.relative_to(path)),
+                                total=cfg.train.episodes) for run in train_runs(cfg, path)]
         evaluate = [eval_progress(job.folder, str(job.folder.relative_to(path)),
                                   total=cfg.eval.episodes) for job in eval_jobs(cfg, path)]
         sections = [("train", train), ("evaluate", evaluate)]
