@@ -28,7 +28,6 @@ from vgs.config.cell import (
 )
 from vgs.config.conditions import (
     CONDITIONS,
-    EVAL_STREAM,
     EvalConfig,
     EvalScene,
     condition_peg,
@@ -61,7 +60,7 @@ from vgs.config.tree import (
 )
 
 __all__ = [
-    "ACTIONS", "BACKBONES", "CONDITIONS", "EVAL_STREAM", "NO_SUCH_FIELD", "PRECISIONS", "PROFILES",
+    "ACTIONS", "BACKBONES", "CONDITIONS", "NO_SUCH_FIELD", "PRECISIONS", "PROFILES",
     "ROTATE_MODES", "AgentConfig", "AssemblyConfig", "CameraConfig", "CellConfig",
     "ControllerConfig", "EvalConfig", "EvalScene", "ExperimentConfig", "FTSensorConfig",
     "GripperConfig", "HoleConfig", "NetworkConfig", "PegConfig", "ReproduceConfig", "RewardConfig",
