@@ -191,6 +191,17 @@ def test_reproduce_quick_at_reduced_size(tmp_path: Path, quick_reproduction: Any
     assert status.returncode == 0, status.stderr
     for line in ("train (2/2 done)", "evaluate (6/6 done)", "sweep (1/1 done)", "report: "):
         assert line in status.stdout, status.stdout
+    sites_csv = tmp_path / "sites.csv"
+    sites = vgs("grasp-sites", str(out), "--condition", "nominal", "--no-progress", "--csv",
+                str(sites_csv), cwd=tmp_path)
+    assert sites.returncode == 0, sites.stderr
+    assert "**vgs, nominal**" in sites.stdout and "| along, either side [mm] |" in sites.stdout
+    with sites_csv.open() as f:
+        written = list(csv.DictReader(f))
+    tested = sum(1 for table in (out / "eval").glob("*/nominal/episodes.csv")
+                 for _ in csv.DictReader(table.open()))
+    assert len(written) == tested
+    assert all(r["across_mm"] for r in written if r["policy"] in ("baseline", "vgs"))
     # started again, every stage is already done: nothing is trained or evaluated again
     again = vgs(*args, cwd=tmp_path)
     assert again.returncode == 0, again.stderr

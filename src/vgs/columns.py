@@ -99,6 +99,12 @@ COLUMNS: dict[str, Column] = {
     "jaw_misalignment_deg": Column("deg", "float", "ground truth, analysis only: angle between "
                                                    "the pads' long side and the peg's axis in "
                                                    "the table plane at the decision, 0-90"),
+    "along_mm": Column("mm", "float", "ground truth, analysis only (vgs grasp-sites): the "
+                                      "chosen pixel's distance along the peg's axis from its "
+                                      "centre of mass, signed"),
+    "across_mm": Column("mm", "float", "ground truth, analysis only (vgs grasp-sites): the "
+                                       "chosen pixel's distance from the peg's axis in the "
+                                       "table plane"),
     # the policy's decision
     "rotation": Column("", "int", "index of the grasp rotation (-1: no network decision)"),
     "row": Column("", "int", "heightmap row of the grasp pixel (-1: none)"),

@@ -1,13 +1,14 @@
 """The ``vgs`` command: ``demo``, ``sweep``, ``export-scene``, ``export-policy``,
 ``model-info``, ``train``, ``heatmap``, ``curves``, ``evaluate``, ``reproduce``, ``report``,
-``seeds``, ``status`` and ``config``.
+``seeds``, ``grasp-sites``, ``status`` and ``config``.
 
 Each command takes only the flags it uses. Those that build a configuration from a profile
 (``demo``, ``sweep``, ``export-scene``, ``train``, ``evaluate``, ``reproduce`` and ``config``)
 take ``--profile``, the cell's override flags (``--peg-mass`` ...) and the generic ``--set
 key=value`` with a dotted path into :class:`vgs.config.ExperimentConfig`; ``model-info`` takes
 ``--profile`` and ``--set`` of ``network.*`` keys only; the commands that read run folders
-(``heatmap``, ``curves``, ``report``, ``seeds``, ``status``, ``export-policy``) take none of
+(``heatmap``, ``curves``, ``report``, ``seeds``, ``grasp-sites``, ``status``,
+``export-policy``) take none of
 them: a run's configuration is the one it recorded. ``vgs config`` lists every key with its
 value and documentation. Bad input,
 whether argparse rejects it or a :class:`vgs.errors.VGSError` is raised, ends with one line

@@ -1,6 +1,6 @@
 """The commands that read run folders and take no configuration flags: ``export-policy``,
-``heatmap``, ``curves``, ``report``, ``seeds`` and ``status``; a run's configuration is the one it
-recorded."""
+``heatmap``, ``curves``, ``report``, ``seeds``, ``grasp-sites`` and ``status``; a run's
+configuration is the one it recorded."""
 
 from __future__ import annotations
 
@@ -84,6 +84,18 @@ def cmd_seeds(args: argparse.Namespace, cfg: ExperimentConfig | None) -> int:
     path = seeds_report([Path(d) for d in args.dirs], Path(args.out))
     print(path.read_text().split("![", 1)[0].rstrip())
     print(f"\nwrote {path}, {path.with_suffix('.csv')} and {path.with_suffix('.png')}")
+    return 0
+
+
+def cmd_grasp_sites(args: argparse.Namespace, cfg: ExperimentConfig | None) -> int:
+    """Print where on the peg each test grasp of a reproduction lay, and what assembled."""
+    from vgs.analysis.graspsites import grasp_sites_report
+
+    print(grasp_sites_report(Path(args.dir), args.policy, args.condition,
+                             Path(args.csv) if args.csv else None,
+                             progress=not args.no_progress), end="")
+    if args.csv:
+        print(f"wrote {args.csv}")
     return 0
 
 

@@ -15,6 +15,7 @@ from typing import Any
 from vgs.cli.folders import (
     cmd_curves,
     cmd_export_policy,
+    cmd_grasp_sites,
     cmd_heatmap,
     cmd_report,
     cmd_seeds,
@@ -88,6 +89,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_reproduce(sub)
     _add_report(sub)
     _add_seeds(sub)
+    _add_grasp_sites(sub)
     _add_status(sub)
     _add_config(sub)
     return parser
@@ -287,6 +289,22 @@ def _add_seeds(sub: Any) -> None:
     seeds.add_argument("--out", required=True,
                        help="folder of seeds.md, seeds.csv and seeds.png")
     seeds.set_defaults(func=cmd_seeds)
+
+
+def _add_grasp_sites(sub: Any) -> None:
+    """``vgs grasp-sites``."""
+    sites = sub.add_parser("grasp-sites", help="where on the peg each test grasp lay, along "
+                                               "its axis and across it, and what assembled")
+    sites.add_argument("dir", help="a reproduce folder or its published copy (with "
+                                   "reproduce.json and eval/<policy>/<condition>/)")
+    sites.add_argument("--policy", action="append", metavar="LABEL",
+                       help="only this policy's tests, e.g. baseline (repeatable; default all)")
+    sites.add_argument("--condition", action="append", choices=CONDITIONS,
+                       help="only this condition's tests (repeatable; default all)")
+    sites.add_argument("--csv", metavar="FILE", help="also write one row per test episode "
+                                                     "(along_mm, across_mm) to FILE")
+    sites.add_argument("--no-progress", action="store_true", help="no progress bar")
+    sites.set_defaults(func=cmd_grasp_sites)
 
 
 def _add_status(sub: Any) -> None:
