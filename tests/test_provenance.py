@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 
 import vgs
-from vgs.runfolder.common import provenance, read_json
+from vgs.runfolder.common import provenance, read_json, source_revision
 
 SMALL = ["--profile", "smoke", "--set", "cell.camera.size=64", "--set",
          "cell.camera.pixel_size=0.007", "--no-progress"]
@@ -28,6 +28,17 @@ def test_provenance_fields() -> None:
     assert p["mujoco_version"] == metadata.version("mujoco")
     assert p["torch_version"] == metadata.version("torch")
     assert p["source_revision"]
+
+
+def test_a_checkout_records_its_commit() -> None:
+    """Run from a git checkout (the tests' editable install), the source revision is the
+    checkout's HEAD, with ``+modified`` when src/ differs from it."""
+    root = Path(vgs.__file__).resolve().parents[2]  # src/vgs/__init__.py -> the checkout
+    if not (root / ".git").exists() or shutil.which("git") is None:
+        pytest.skip("vgs is not imported from a git checkout")
+    head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True,
+                          text=True, timeout=10).stdout.strip()
+    assert source_revision() in (head, head + "+modified")
 
 
 @pytest.mark.slow

@@ -255,7 +255,7 @@ def source_revision() -> str:
     site-packages, even one inside another repository); ``"unknown"`` without git."""
     import subprocess
 
-    src = Path(__file__).resolve().parent.parent  # .../src when run from a checkout
+    src = Path(__file__).resolve().parents[2]  # src/vgs/runfolder/common.py -> src
     root = src.parent
     if src.name != "src" or not (root / "pyproject.toml").is_file():
         return "installed package"
