@@ -85,6 +85,13 @@ def test_readme_is_a_first_page() -> None:
     assert TEST_COMMAND in first_screen
 
 
+def test_the_docs_pages_stay_a_manual() -> None:
+    """docs/*.md describe the system as it is, in at most 2,000 lines together (history goes
+    to CHANGELOG.md)."""
+    total = sum(len(p.read_text().splitlines()) for p in (ROOT / "docs").glob("*.md"))
+    assert total <= 2000, f"docs/*.md hold {total} lines (at most 2000)"
+
+
 def test_ci_runs_the_readme_test_command() -> None:
     """.ci/run runs exactly the README's test command."""
     ci = ROOT / ".ci" / "run"
