@@ -95,12 +95,13 @@ REQUIRED = {
     "model-info": [], "train": ["--mode", "vgs", "--out", "x"], "heatmap": ["RUN", "--out", "x"],
     "curves": ["RUN", "--out", "x"], "evaluate": ["--policy", "center", "--out", "x"],
     "reproduce": ["--out", "x"], "report": ["DIR"], "seeds": ["DIR", "--out", "x"],
-    "status": ["DIR"], "config": [],
+    "grasp-sites": ["DIR"], "status": ["DIR"], "config": [],
 }
 # Commands that build their configuration from a profile and the cell's override flags.
 CONFIGURED = {"demo", "sweep", "export-scene", "train", "evaluate", "reproduce", "config"}
-# Commands that draw a progress bar (tqdm: vgs.experiments.sweep, .train, .evaluate).
-PROGRESS_BARS = {"sweep", "train", "evaluate", "reproduce"}
+# Commands that draw a progress bar (tqdm: vgs.experiments.sweep, .train, .evaluate,
+# vgs.analysis.graspsites).
+PROGRESS_BARS = {"sweep", "train", "evaluate", "reproduce", "grasp-sites"}
 
 
 def _takes(command: str, *flags: str) -> bool:
@@ -141,7 +142,7 @@ def test_every_module_with_a_progress_bar_is_known() -> None:
     with_bar = {p.relative_to(root).as_posix() for p in root.rglob("*.py")
                 if "tqdm" in p.read_text()}
     assert with_bar == {"experiments/sweep.py", "experiments/train.py",
-                        "experiments/evaluate.py"}
+                        "experiments/evaluate.py", "analysis/graspsites.py"}
 
 
 def test_report_refuses_a_configuration_flag(capsys: pytest.CaptureFixture[str]) -> None:
