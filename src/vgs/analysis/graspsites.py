@@ -30,9 +30,10 @@ from tqdm import tqdm
 from vgs.analysis.report import load_results
 from vgs.assembly.episode import EpisodeRunner
 from vgs.checkpoint import atomic_write_text
-from vgs.config import ExperimentConfig, from_dict
+from vgs.config import ExperimentConfig
 from vgs.errors import ConfigError
 from vgs.runfolder.common import read_json
+from vgs.runfolder.status import recorded_config
 
 ALONG_EDGES_MM = (0.0, 26.0, 35.0, 40.0, 45.0, np.inf)  # |along_mm| bins of the table
 ACROSS_EDGES_MM = (0.0, 5.0, 10.0, np.inf)  # across_mm bins of the table
@@ -45,11 +46,12 @@ def folder_config(out: Path) -> ExperimentConfig:
 
     Raises:
         ConfigError: If ``out`` holds no ``reproduce.json``.
+        CorruptFileError: If the configuration it records is not usable.
     """
     path = out / "reproduce.json"
     if not path.is_file():
         raise ConfigError("grasp-sites", f"{out} is not a reproduce folder (no reproduce.json)")
-    return from_dict(ExperimentConfig, read_json(path)["config"])
+    return recorded_config(path, read_json(path).get("config"))
 
 
 def grasp_sites(df: pd.DataFrame, cfg: ExperimentConfig, progress: bool = True

@@ -117,7 +117,7 @@ def train_progress(folder: Path, name: str | None = None, total: int | None = No
             return Progress(name, 0, total, False, None, None)
         raise ConfigError("dir", f"{folder} does not exist")
     meta = read_json(meta_path)
-    cfg = _config(meta_path, meta.get("config"))
+    cfg = recorded_config(meta_path, meta.get("config"))
     total = cfg.train.episodes
     rows: list[dict[str, str]] = []
     if table.exists():
@@ -199,7 +199,12 @@ def eval_progress(folder: Path, name: str | None = None, total: int | None = Non
     return Progress(name, done, total or 0, finished, _mean(walls), last, "; ".join(notes))
 
 
-def _config(path: Path, data: object) -> ExperimentConfig:
+def recorded_config(path: Path, data: object) -> ExperimentConfig:
+    """The configuration ``data`` that the file ``path`` recorded (its ``config``).
+
+    Raises:
+        CorruptFileError: If it is no usable configuration.
+    """
     try:
         return from_dict(ExperimentConfig, data)  # type: ignore[arg-type]
     except (TypeError, ValueError, AttributeError) as exc:
@@ -234,7 +239,7 @@ def folder_status(path: Path) -> list[tuple[str, list[Progress]]]:
         raise ConfigError("dir", f"{path} is not a folder")
     if (path / "reproduce.json").exists():
         meta = read_json(path / "reproduce.json")
-        cfg = _config(path / "reproduce.json", meta.get("config"))
+        cfg = recorded_config(path / "reproduce.json", meta.get("config"))
         train = [train_progress(run.folder, str(run.folder.relative_to(path)),
                                 total=cfg.train.episodes) for run in train_runs(cfg, path)]
         evaluate = [eval_progress(job.folder, str(job.folder.relative_to(path)),
