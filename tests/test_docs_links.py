@@ -85,6 +85,21 @@ def test_readme_is_a_first_page() -> None:
     assert TEST_COMMAND in first_screen
 
 
+def _table_lines(section: str) -> list[str]:
+    return [line for line in section.splitlines() if line.startswith("|")]
+
+
+def test_the_readme_headline_is_the_published_seeds_summary() -> None:
+    """The README's headline table is, line for line, the summary of the seeds table it links
+    (written by `vgs seeds`), so the headline cannot drift from the published result set."""
+    headline = README.read_text().split("## Headline result")[1].split("\n## ")[0]
+    linked = re.findall(r"\((docs/results/[^)]+/seeds\.md)\)", headline)
+    assert len(linked) == 1, "the headline links one seeds table"
+    seeds = (ROOT / linked[0]).read_text()
+    summary = seeds.split("## Summary")[1].split("\n## ")[0]
+    assert _table_lines(headline) == _table_lines(summary)
+
+
 def test_the_docs_pages_stay_a_manual() -> None:
     """docs/*.md describe the system as it is, in at most 2,000 lines together (history goes
     to CHANGELOG.md)."""

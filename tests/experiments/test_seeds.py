@@ -154,5 +154,11 @@ def test_report_files(tmp_path: Path) -> None:
     three = seeds_report([*folders, _folder(tmp_path, "s2", 0.10)], tmp_path / "out3")
     assert "two training runs only" not in three.read_text()
     assert "three training runs only" in three.read_text()
+    summary = text.split("## Summary")[1].split("## ")[0].strip().splitlines()
+    assert summary[0].startswith("| condition | assembled of 300, baseline / VGS (s0; s1) |")
+    assert len(summary) == 3 and summary[2].startswith("| Nominal peg | 300 / 300; 300 / 300 |")
+    per_run = [float(g.rstrip(" %")) for g in summary[2].split(" | ")[2].split("; ")]
+    assert per_run == pytest.approx([-5.0, 5.0], abs=0.3)
+    assert summary[2].endswith("| +13.83 % |")
     csv = pd.read_csv(tmp_path / "out" / "seeds.csv")
     assert list(csv["train_run"]) == ["s0", "s1", "mean"]

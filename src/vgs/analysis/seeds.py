@@ -7,7 +7,8 @@ grasp, another's not). ``vgs seeds DIR [DIR ...] --out DEST`` gathers the evalua
 several reproduce folders (or their published copies under ``docs/results``) and writes:
 
 * ``DEST/seeds.csv``: one row per (condition, training run) and one ``mean`` row per condition;
-* ``DEST/seeds.md``: the same as tables, with the commands' folders;
+* ``DEST/seeds.md``: a summary (one line per condition, the README's headline) and the same
+  as tables per condition, with the commands' folders;
 * ``DEST/seeds.png``: the gains with their intervals, per condition, the paper's gain beside.
 
 Statistics. For training run ``s`` the gain is ``g_s = 100 (T_base,s - T_vgs,s) / T_base,s`` on
@@ -297,6 +298,39 @@ def _interval_verdict(low: float, high: float) -> str:
     return "its interval includes zero: no difference shown."
 
 
+def summary_rows(table: pd.DataFrame) -> list[str]:
+    """One line per condition: the headline table (the README copies it, a test compares).
+
+    Per training run the assembled counts and the gain on the mean time of successes; over the
+    runs the mean gains (crossed bootstrap and, with two or more runs, Student's t interval),
+    the mean of the runs' standard deviations of the assembly time, and the paper's gain.
+    """
+    runs = table[table["train_run"] != "mean"]
+    episodes = sorted(set(int(e) for e in runs["episodes"]))
+    of = f" of {episodes[0]}" if len(episodes) == 1 else ""
+    names = "; ".join(dict.fromkeys(str(r) for r in runs["train_run"]))
+    lines = [f"| condition | assembled{of}, baseline / VGS ({names}) | gain per run | mean gain "
+             "| gain in alignment, mean | gain in total time, mean | "
+             "std [s], baseline / VGS, mean | gain (paper) |",
+             "|---|---|---|---|---|---|---|---|"]
+    for condition in dict.fromkeys(table["condition"]):
+        part = runs[runs["condition"] == condition]
+        mean = table[(table["condition"] == condition)
+                     & (table["train_run"] == "mean")].iloc[0]
+        paper = PAPER.get(condition, {}).get("gain")
+        assembled = "; ".join(f"{int(r['successes_baseline'])} / {int(r['successes_vgs'])}"
+                              for _, r in part.iterrows())
+        per_run = "; ".join(f"{r['gain_pct']:+.1f} %" if math.isfinite(r["gain_pct"])
+                            else "n/a" for _, r in part.iterrows())
+        lines.append(
+            f"| {CONDITION_TITLES.get(condition, condition).split(' (')[0]} | {assembled} | "
+            f"{per_run} | {_gain_text(mean)} | {_gain_text(mean, ALIGN_GAIN.name)} | "
+            f"{_gain_text(mean, TOTAL_GAIN.name)} | {_fmt(mean['time_std_s_baseline'], 2)} / "
+            f"{_fmt(mean['time_std_s_vgs'], 2)} | "
+            f"{'n/a' if paper is None else f'{paper:+.2f} %'} |")
+    return lines
+
+
 def seeds_markdown(table: pd.DataFrame, folders: list[Path], dest: Path, figure: str) -> str:
     """The tables of :func:`seeds_table` as Markdown."""
     lines = ["# VGS against the baseline, across training seeds", "",
@@ -316,7 +350,9 @@ def seeds_markdown(table: pd.DataFrame, folders: list[Path], dest: Path, figure:
              "failed attempts: the summed times of the successes alone (it compares like with "
              "like only where both policies assemble about as many tests: a policy that "
              "assembles more sums more times); alignment: the gain on "
-             "the mean alignment time of the successes, the phase the paper studies.", ""]
+             "the mean alignment time of the successes, the phase the paper studies.", "",
+             "## Summary", ""]
+    lines += summary_rows(table) + [""]
     for condition in dict.fromkeys(table["condition"]):
         part = table[table["condition"] == condition]
         paper = PAPER.get(condition, {}).get("gain")
