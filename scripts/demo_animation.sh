@@ -1,16 +1,16 @@
 #!/usr/bin/env bash
 # The README's animations and their captions' numbers, made on the current cell (issue 42):
 #   docs/figures/demo.gif         the centre heuristic, seed 3 (the README's `vgs demo --seed 3`)
-#   docs/figures/demo_policy.gif  a published trained network (paper-light, rotation action,
+#   docs/figures/demo_policy.gif  a published trained network (paper-light, position action,
 #                                 seed 0) on the same seed, its Q heat map beside the episode
 # and docs/figures/demo.png, the demo figure. Prints one caption line per animation: write
 # those numbers into the README's captions. About 1 min on a 2-core host; rendering needs
 # OpenGL (EGL without a display).
-# Usage: scripts/demo_animation.sh [POLICY]   (default: docs/results/paper_light_rotation_s0/vgs)
+# Usage: scripts/demo_animation.sh [POLICY]   (default: docs/results/paper_light_s0/vgs)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 VGS=${VGS:-.venv/bin/vgs}
-POLICY=${1:-docs/results/paper_light_rotation_s0/vgs}
+POLICY=${1:-docs/results/paper_light_s0/vgs}
 VIDEO=(--video-size 400x300 --video-speed 6 --video-fps 10)
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
