@@ -118,7 +118,7 @@ class _Search(ContactPhases):
     def __init__(self, heights: list[float]) -> None:
         self.robot = SimpleNamespace(arm=_Arm())
         self.cfg = profile("paper").assembly
-        self.hole_xy = np.zeros(2)
+        self.nominal_hole_xy = np.zeros(2)
         self.low_rim_from_tcp = np.zeros(3)
         self.retries = 0
         self._heights = iter(heights)

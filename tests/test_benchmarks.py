@@ -18,7 +18,8 @@ BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 
 # script -> (tiny arguments, a line fragment its last section prints)
 TINY: dict[str, tuple[list[str], str]] = {
-    "bench_cell.py": (["--profile", "smoke", "--episodes", "1", "--steps", "20"], "sum"),
+    "bench_cell.py": (["--profile", "smoke", "--episodes", "1", "--steps", "20"],
+                      "under OPENBLAS_CORETYPE"),
     "bench_eval.py": (["--episodes", "1", "--no-ray", "--light-episodes", "0",
                        "--probe-steps", "200"], "quick profile: not measured"),
     "bench_network.py": (["--backbones", "light", "--rotations", "2", "--rotate", "input",

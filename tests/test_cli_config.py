@@ -95,7 +95,7 @@ REQUIRED = {
     "model-info": [], "train": ["--mode", "vgs", "--out", "x"], "heatmap": ["RUN", "--out", "x"],
     "curves": ["RUN", "--out", "x"], "evaluate": ["--policy", "center", "--out", "x"],
     "reproduce": ["--out", "x"], "report": ["DIR"], "seeds": ["DIR", "--out", "x"],
-    "grasp-sites": ["DIR"], "status": ["DIR"], "config": [],
+    "grasp-sites": ["DIR"], "com-fit": ["DIR"], "status": ["DIR"], "config": [],
 }
 # Commands that build their configuration from a profile and the cell's override flags.
 CONFIGURED = {"demo", "sweep", "export-scene", "train", "evaluate", "reproduce", "config"}

@@ -16,7 +16,7 @@ import pytest
 from vgs.render import gl_available
 
 ROOT = Path(__file__).resolve().parents[1]
-PUBLISHED = ROOT / "docs" / "results" / "paper_light_rotation_s0" / "vgs"
+PUBLISHED = ROOT / "docs" / "results" / "paper_light_s0" / "vgs"
 GL, GL_REASON = gl_available()
 needs_gl = pytest.mark.skipif(not GL, reason=f"no OpenGL for MuJoCo's renderer: {GL_REASON}")
 SMALL = ["--profile", "smoke", "--set", "cell.camera.size=64", "--set",

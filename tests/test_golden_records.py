@@ -38,7 +38,7 @@ def test_the_cases_cover_what_they_claim() -> None:
     assert reasons["center_success"] == reasons["plus35_success"] == ""
     assert reasons["minus35_success"] == reasons["varied_peg"] == ""
     assert reasons["grasp_miss"] == "grasp"
-    assert reasons["plus35_timeout"].startswith("timeout:")
+    assert reasons["plus45_timeout"].startswith("timeout:")
     assert abs(records["plus35_success"]["grasp_offset_mm"] - 35) < 3
     assert abs(records["minus35_success"]["grasp_offset_mm"] + 35) < 3
 

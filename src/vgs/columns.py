@@ -66,13 +66,19 @@ COLUMNS: dict[str, Column] = {
                                        "along its axis (sweep)"),
     "peg_mass_kg": Column("kg", "float", "peg mass"),
     "peg_length_mm": Column("mm", "float", "peg length"),
+    "peg_com_shift_mm": Column("mm", "float", "ground truth: the peg's centre of mass from its "
+                                              "middle along the axis, towards its heavy end "
+                                              "(0: a uniform peg)"),
     "hole_offset_mm": Column("mm", "float", "ground truth: displacement of the hole from its "
                                             "nominal position"),
     # the episode's outcome (the episode record)
     "grasp_success": Column("", "bool", "the RG2 holds the peg after the lift"),
     "grasp_offset_mm": Column("mm", "float", "ground truth, analysis only: signed distance "
-                                             "along the peg axis from the centre of mass to the "
+                                             "along the peg axis from the peg's middle to the "
                                              "grasp point (NaN when not grasped)"),
+    "grasp_offset_com_mm": Column("mm", "float", "ground truth, analysis only: signed distance "
+                                                 "along the peg axis from its centre of mass to "
+                                                 "the grasp point (NaN when not grasped)"),
     "assembly_success": Column("", "bool", "the peg ended inserted to the insertion depth"),
     "failure_reason": Column("", "str", "empty on success, else what stopped the episode "
                                         "(grasp, timeout:<phase>, unstable, "
@@ -102,9 +108,10 @@ COLUMNS: dict[str, Column] = {
     "along_mm": Column("mm", "float", "ground truth, analysis only (vgs grasp-sites): the "
                                       "chosen pixel's distance along the peg's axis from its "
                                       "centre of mass, signed"),
-    "across_mm": Column("mm", "float", "ground truth, analysis only (vgs grasp-sites): the "
-                                       "chosen pixel's distance from the peg's axis in the "
-                                       "table plane"),
+    "across_mm": Column("mm", "float", "ground truth, analysis only: the commanded grasp "
+                                       "point's distance from the peg's axis across it, in "
+                                       "the table plane, when the policy decided (every "
+                                       "record; vgs grasp-sites recomputes it for old tables)"),
     # the policy's decision
     "rotation": Column("", "int", "index of the grasp rotation (-1: no network decision)"),
     "row": Column("", "int", "heightmap row of the grasp pixel (-1: none)"),
@@ -193,6 +200,7 @@ LEGACY: dict[str, tuple[str, float]] = {
     "peg_length": ("peg_length_mm", 1000.0),  # [m]
     "length_mm": ("peg_length_mm", 1.0),  # sweep
     "grasp_offset": ("grasp_offset_mm", 1000.0),  # [m]
+    "grasp_offset_com": ("grasp_offset_com_mm", 1000.0),  # [m]
     "success": ("assembly_success", 1.0),
     "assembly_time": ("assembly_time_s", 1.0),
     "peak_moment_measured": ("peak_moment_measured_nm", 1.0),

@@ -353,9 +353,9 @@ def test_rows_record_the_host_and_mixed_hosts_are_reported(
 
 def test_published_results_load_and_their_reports_rebuild(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    """A published result set (docs/results, made with the rotation action before
-    ``network.action`` existed) still reads, reports and shows its status; real files."""
-    src = REPO / "docs" / "results" / "paper_light_rotation_s0"
+    """A published result set (docs/results, made before ``across_mm`` was a column) still
+    reads, reports and shows its status; real files."""
+    src = REPO / "docs" / "results" / "paper_light_s0"
     out = tmp_path / "published"
     shutil.copytree(src, out)
     capsys.readouterr()

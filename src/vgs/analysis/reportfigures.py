@@ -22,6 +22,9 @@ CONDITION_TITLES = {
     "nominal": "Nominal peg (paper Fig. 8)",
     "mass": "Mass +-15 % (paper Fig. 9)",
     "length": "Length 85-115 %, mass following (paper Fig. 10)",
+    "com": "Centre of mass 20 mm off the middle, heavy end painted",
+    "com-hidden": "Centre of mass 20 mm off the middle, unmarked",
+    "com-spread": "Centre of mass spread within +-20 mm, unmarked",
 }
 
 

@@ -13,8 +13,8 @@ from collections import deque
 
 import numpy as np
 
+from vgs import vecmath as vm
 from vgs.assembly.spiral import GOLDEN_ANGLE, spiral_points
-from vgs.control.transforms import exp_so3
 
 
 class Recovery(Exception):
@@ -52,14 +52,17 @@ class ContactPhases:
 
     def _lowest_rim_offset(self, R_tcp: np.ndarray) -> np.ndarray:
         """Vector from the lower face's centre to its lowest rim point for tool attitude R."""
-        axis = self.estimate.down_sign * R_tcp[:, 0]
-        v = np.array([0.0, 0.0, -1.0]) - np.dot([0.0, 0.0, -1.0], axis) * axis
-        n = np.linalg.norm(v)
-        return np.zeros(3) if n < 1e-9 else self.peg.radius * v / n
+        axis = vm.scale(self.estimate.down_sign, vm.column(vm.mat3(R_tcp), 0))
+        # v = down - (down . a) a with down = (0, 0, -1): the down direction across the axis.
+        v = vm.sub((0.0, 0.0, -1.0), vm.scale(-axis[2], axis))
+        n = vm.norm(v)
+        return np.zeros(3) if n < 1e-9 else np.array(vm.scale(self.peg.radius / n, v))
 
     def _moment(self) -> float:
         """Measured moment about the pinch axis at the TCP (the pads) [N m]."""
-        return float(np.dot(self.robot.arm.wrench[3:], self.tilt_axis))
+        _, _, _, m0, m1, m2 = self.robot.arm.wrench.tolist()
+        a0, a1, a2 = self._tilt_axis_t
+        return m0 * a0 + m1 * a1 + m2 * a2
 
     def _comply(self, lateral: float, lateral_damping: float | None = None,
                 z_damping: float | None = None,
@@ -117,7 +120,7 @@ class ContactPhases:
         # to a wrong contact state.
         self.R_search = robot.arm.R_ref.copy()
         low = self.low_rim_from_tcp[:2]
-        for target in spiral_points(self.hole_xy, cfg.spiral_pitch, cfg.hop_step,
+        for target in spiral_points(self.nominal_hole_xy, cfg.spiral_pitch, cfg.hop_step,
                                     cfg.search_radius, turn=self.retries * GOLDEN_ANGLE):
             z = self._touch_down(target - low)
             if self.z_plane - z > cfg.drop_threshold:
@@ -169,7 +172,7 @@ class ContactPhases:
         robot, cfg = self.robot, self.cfg
         adm = robot.arm.admittance
         robot.arm.absorb_offset()
-        lead = self.low_rim_from_tcp[:2] / max(np.linalg.norm(self.low_rim_from_tcp[:2]), 1e-9)
+        lead = self.low_rim_from_tcp[:2] / max(vm.norm(self.low_rim_from_tcp[:2].tolist()), 1e-9)
         # Lateral damping for a free sliding speed of slide_speed under the bias.
         self._comply(0.0, lateral_damping=cfg.three_point_force / cfg.slide_speed)
         # Settle onto the rim under the light press before the bias.
@@ -192,7 +195,7 @@ class ContactPhases:
         ``_three_point_depth`` below the plane contact."""
         robot, cfg = self.robot, self.cfg
         adm = robot.arm.admittance
-        direction = direction / float(np.linalg.norm(direction))
+        direction = direction / vm.norm(direction.tolist())
         adm.wrench_des[:] = [*(cfg.three_point_force * direction), -cfg.slide_press_force,
                              0.0, 0.0, 0.0]
         window = max(1, int(round(cfg.still_time / robot.dt)))
@@ -206,13 +209,13 @@ class ContactPhases:
             xy, z = robot.arm.tcp_pose()[0][:2], robot.arm.tcp_height()
             # The rim point cannot travel further than across the hole, nor climb back onto
             # the surface, while it is in the hole: the wrong contact state.
-            if (np.linalg.norm(xy - self.slide_start) > self.peg.diameter
+            if (vm.norm((xy - self.slide_start).tolist()) > self.peg.diameter
                     or z > self.z_plane + cfg.drop_threshold):
                 raise Recovery
             if z < z_low:
                 z_low, xy_low = z, xy
             elif (z > z_low + 0.5 * max(self.z_plane - z_low, 2 * cfg.drop_threshold)
-                    and np.linalg.norm(xy - xy_low) > cfg.climb_travel):
+                    and vm.norm((xy - xy_low).tolist()) > cfg.climb_travel):
                 # Climbing the far edge: the lower face crossed the hole beside its centre,
                 # too shallow for the wall to stop the rim point. Back to where it lay
                 # deepest, to go on across the lead.
@@ -221,7 +224,7 @@ class ContactPhases:
                               robot.arm.R_ref, speed=cfg.slide_speed, settle=0.0)
                 return False
             if n % window == 0:
-                moving = np.linalg.norm(xy - last) > 0.25 * cfg.slide_speed * cfg.still_time
+                moving = vm.norm((xy - last).tolist()) > 0.25 * cfg.slide_speed * cfg.still_time
                 last = xy
                 if not moving:
                     self.z_three = robot.arm.tcp_height()
@@ -278,27 +281,29 @@ class ContactPhases:
     def _tilt(self, R_world_tcp: np.ndarray) -> float:
         """Signed angle from vertical, about the tilt axis, of the peg axis of tool attitude
         ``R_world_tcp`` (the peg's turn in the pads is not in it)."""
-        down = self.estimate.down_sign * R_world_tcp[:, 0]
-        return math.atan2(float(np.dot(np.cross([0.0, 0.0, -1.0], down), self.tilt_axis)),
-                          float(-down[2]))
+        down = vm.scale(self.estimate.down_sign, vm.column(vm.mat3(R_world_tcp), 0))
+        return math.atan2(vm.dot(vm.cross((0.0, 0.0, -1.0), down), self._tilt_axis_t),
+                          -down[2])
 
     def _rotate_about_tip(self, angle: float, n_ticks: int) -> None:
         """Turn the reference by ``angle`` about the pinch axis around the estimated lower end
         (smoothstep profile); stop where the measured moment opposes the turn beyond the
         moment limit (the rotation would only load the grasp)."""
         robot = self.robot
-        p0, R0 = robot.arm.p_ref.copy(), robot.arm.R_ref.copy()
-        tip = p0 + self.estimate.hanging * self.estimate.down_sign * R0[:, 0]
+        p0, R0 = robot.arm.reference_t
+        # tip = p0 + h s x0 (x0 the tool's x axis, s the down sign): the estimated lower end.
+        reach = self.estimate.hanging * self.estimate.down_sign
+        tip = vm.add(p0, vm.scale(reach, vm.column(R0, 0)))
         n = max(1, n_ticks)
         sign = 1.0 if angle >= 0 else -1.0
-        tip_to_tcp = p0 - tip
-        a0, a1, a2 = self.tilt_axis.tolist()
+        tip_to_tcp = vm.sub(p0, tip)
+        a0, a1, a2 = self._tilt_axis_t
         for k in range(1, n + 1):
             s = k / n
             s = s * s * (3 - 2 * s)
             turn = s * angle
-            Rk = exp_so3((turn * a0, turn * a1, turn * a2))
-            robot.arm.set_reference(tip + Rk @ tip_to_tcp, Rk @ R0)
+            Rk = vm.exp_so3((turn * a0, turn * a1, turn * a2))
+            robot.arm.set_reference(vm.add(tip, vm.mv(Rk, tip_to_tcp)), vm.mm(Rk, R0))
             robot.tick()
             self._watch()
             if -sign * self._moment() > self.moment_limit:

@@ -14,6 +14,7 @@ from dataclasses import dataclass, replace
 import mujoco
 import numpy as np
 
+from vgs import vecmath as vm
 from vgs.assembly.grasp import grasp
 from vgs.assembly.record import EpisodeRecord
 from vgs.assembly.strategy import AssemblyModule
@@ -74,6 +75,32 @@ def jaw_misalignment_deg(yaw: float, R_world_peg: np.ndarray) -> float:
     return math.degrees(math.acos(min(1.0, cos)))
 
 
+def across_axis_mm(command: GraspCommand, p_world_peg: np.ndarray,
+                   R_world_peg: np.ndarray) -> float:
+    """Ground truth (analysis only): the commanded grasp point's distance from the peg's axis
+    across it, in the table plane [mm]: with the axis ``a`` projected on the table and
+    normalised, and ``v = q - p`` from the peg's centre to the grasp point,
+    ``1000 |a_x v_y - a_y v_x|``. NaN if the axis stands upright."""
+    ax, ay = float(R_world_peg[0, 2]), float(R_world_peg[1, 2])
+    n = math.sqrt(ax * ax + ay * ay)
+    if n < 1e-9:
+        return math.nan
+    vx, vy = command.x - float(p_world_peg[0]), command.y - float(p_world_peg[1])
+    return 1000.0 * abs(ax * vy - ay * vx) / n
+
+
+def perceived_grasp_along(hm: Heightmap, command: GraspCommand) -> float | None:
+    """The cell's own knowledge of where it grasps: the commanded point's signed distance from
+    the middle of the peg the camera perceives, along the pads' long side
+    ``u = (cos yaw, sin yaw)``: ``s = (q - c) . u`` [m]. ``None`` when nothing is perceived."""
+    try:
+        center, _, _ = peg_axis_from_heightmap(hm)
+    except SimulationError:
+        return None
+    cx, cy = center.tolist()
+    return (command.x - cx) * math.cos(command.yaw) + (command.y - cy) * math.sin(command.yaw)
+
+
 def offset_policy(offset: float) -> Policy:
     """Grasp the peg ``offset`` metres from its visible centre along its visible axis."""
 
@@ -104,9 +131,7 @@ class GraspWatch:
     A contact ``i`` on the peg pushes it with the force ``f_i = C_i^T f_c`` (world frame, from
     its contact frame ``C_i``) at ``p_i``, and with a torsional torque ``t_c n_i`` about its
     normal; its moment about the TCP is ``(p_i - p_tcp) x f_i + t_c n_i``, of which the record
-    takes the component along the pinch axis. The cross products are written out on Python
-    floats (they round as numpy's do); the matrix and dot products stay numpy's, whose
-    summation order the record depends on.
+    takes the component along the pinch axis (plain floats, :mod:`vgs.vecmath`).
     """
 
     def __init__(self, robot: Robot, every: int = 4) -> None:
@@ -116,26 +141,22 @@ class GraspWatch:
         self._n = 0
         d, ids, m = self.cell.data, self.cell.ids, self.cell.model
         # Views into the simulator's state, made once.
-        R_world_tcp = d.site_xmat[ids.tcp_site].reshape(3, 3)
-        self._R_tcp_world = R_world_tcp.T
-        self._pinch_world = R_world_tcp[:, 1]
+        self._R_world_tcp = d.site_xmat[ids.tcp_site]  # flat, row-major views
         self._p_world_tcp = d.site_xpos[ids.tcp_site]
-        self._peg_axis_world = d.xmat[ids.peg_body].reshape(3, 3)[:, 2]
-        self._axis_tcp = np.zeros(3)
-        self._R0 = self._relative().copy()
+        self._R_world_peg = d.xmat[ids.peg_body]
+        self._R0 = self._relative()
         self.turn_deg = 0.0
         self.peak_moment = 0.0
         self._f = np.zeros(6)
-        self._f_world = np.zeros(3)
-        self._torque = np.zeros(3)
         finger_bodies = {int(m.geom_bodyid[g]) for g in ids.pad_geoms}
         self._is_finger = [int(m.geom_bodyid[g]) in finger_bodies for g in range(m.ngeom)]
         self._peg = int(ids.peg_geom)
 
-    def _relative(self) -> np.ndarray:
-        """The peg's axis in the tool frame (its spin about its own axis does not matter);
-        overwritten by the next call."""
-        return np.matmul(self._R_tcp_world, self._peg_axis_world, out=self._axis_tcp)
+    def _relative(self) -> vm.Vec3:
+        """The peg's axis in the tool frame, ``R_world_tcp^T a_world`` (its spin about its own
+        axis does not matter)."""
+        R_peg = self._R_world_peg.tolist()
+        return vm.mtv(tuple(self._R_world_tcp.tolist()), (R_peg[2], R_peg[5], R_peg[8]))
 
     def __call__(self) -> None:
         if self.robot.phase == "release":
@@ -146,7 +167,7 @@ class GraspWatch:
 
     def _sample(self) -> None:
         """One sample: the peg's turn in the pads and the moment on it about the pinch axis."""
-        cos = float(np.dot(self._relative(), self._R0))
+        cos = vm.dot(self._relative(), self._R0)
         self.turn_deg = max(self.turn_deg,
                             math.degrees(math.acos(max(-1.0, min(1.0, cos)))))
         m, d = self.cell.model, self.cell.data
@@ -161,27 +182,27 @@ class GraspWatch:
             return
         frames, dims, pos = con.frame, con.dim.tolist(), con.pos
         tx, ty, tz = self._p_world_tcp.tolist()
-        pinch = self._pinch_world
-        f_c, f_c_linear, f_world, torque = self._f, self._f[:3], self._f_world, self._torque
+        pinch = vm.column(tuple(self._R_world_tcp.tolist()), 1)
+        f_c = self._f
         moment = 0.0
         for i in rows:
             mujoco.mj_contactForce(m, d, i, f_c)
-            frame = frames[i].reshape(3, 3)
-            # The force on geom2, world frame.
-            fx, fy, fz = np.matmul(frame.T, f_c_linear, out=f_world).tolist()
+            frame = tuple(frames[i].tolist())  # rows: normal, tangents (world)
+            forces = f_c.tolist()
+            # The force on geom2, world frame: C^T f_c.
+            fx, fy, fz = vm.mtv(frame, forces[:3])
             # Torsional friction: a torque about the contact normal (frame's first row).
             if dims[i] >= 4:
-                t_c = float(f_c[3])
-                nx, ny, nz = frame[0].tolist()
-                tau = (t_c * nx, t_c * ny, t_c * nz)
+                t_c = forces[3]
+                tau = (t_c * frame[0], t_c * frame[1], t_c * frame[2])
             else:
                 tau = (0.0, 0.0, 0.0)
             sign = -1.0 if geom[i][0] == peg else 1.0
             px, py, pz = pos[i].tolist()
             rx, ry, rz = px - tx, py - ty, pz - tz
-            torque[:] = ((ry * fz - rz * fy) + tau[0], (rz * fx - rx * fz) + tau[1],
-                         (rx * fy - ry * fx) + tau[2])
-            moment += sign * float(np.dot(torque, pinch))
+            torque = ((ry * fz - rz * fy) + tau[0], (rz * fx - rx * fz) + tau[1],
+                      (rx * fy - ry * fx) + tau[2])
+            moment += sign * vm.dot(torque, pinch)
         if self.cell.stiction is not None and self.cell.stiction.stuck:
             # What the pads' stick state carries beyond their contacts' friction.
             moment += float(self.cell.stiction.weld_wrench()[1][1])
@@ -197,10 +218,11 @@ class EpisodeRunner:
 
     def __init__(self, cfg: ExperimentConfig) -> None:
         self.cfg = cfg
-        self._cells: dict[tuple[float, float], tuple[Cell, RayCastCamera]] = {}
+        self._cells: dict[tuple[float, float, float, str], tuple[Cell, RayCastCamera]] = {}
 
     def cell(self, peg: PegConfig) -> tuple[Cell, RayCastCamera]:
-        key = (round(peg.mass, 9), round(peg.length, 9))
+        key = (round(peg.mass, 9), round(peg.length, 9), round(peg.com_shift_mm, 9),
+               peg.com_marking)
         if key not in self._cells:
             if len(self._cells) > 8:
                 self._cells.clear()
@@ -240,13 +262,16 @@ class EpisodeRunner:
         rng = np.random.default_rng(seed)
         cell.reset(rng)
         hm = cam.capture(cell.data)
-        record = EpisodeRecord(seed=seed, peg_mass=peg.mass, peg_length=peg.length)
-        record.hole_offset_mm = float(np.linalg.norm(cell.hole_xy - cell.cfg.hole.nominal_xy)
-                                      * 1000)
+        record = EpisodeRecord(seed=seed, peg_mass=peg.mass, peg_length=peg.length,
+                               peg_com_shift_mm=peg.com_shift_mm)
+        record.hole_offset_mm = vm.norm((cell.hole_xy - cell.cfg.hole.nominal_xy).tolist()) * 1000
         robot = Robot(cell, self.cfg.controller, np.random.default_rng([seed, 1]), trace=trace)
         try:
             command = policy(hm)
-            record.jaw_misalignment_deg = jaw_misalignment_deg(command.yaw, cell.peg_pose()[1])
+            p_peg, R_peg = cell.peg_pose()
+            record.jaw_misalignment_deg = jaw_misalignment_deg(command.yaw, R_peg)
+            record.across_mm = across_axis_mm(command, p_peg, R_peg)
+            grasp_along = perceived_grasp_along(hm, command)
             row, col = hm.world_to_pixel(command.x, command.y)
             inside = 0 <= row < hm.depth.shape[0] and 0 <= col < hm.depth.shape[1]
             surface = float(hm.depth[row, col]) if inside else 0.0
@@ -258,6 +283,7 @@ class EpisodeRunner:
             return record, robot, hm
         record.grasp_success = result.success
         record.grasp_offset = result.offset
+        record.grasp_offset_com = result.offset - peg.com_shift_mm / 1000.0
         if not result.success:
             record.failure_reason = "grasp"
             return record, robot, hm
@@ -267,7 +293,7 @@ class EpisodeRunner:
         nominal = self.cfg.cell.peg
         hole = self.cfg.cell.hole
         module = AssemblyModule(robot, self.cfg.assembly, nominal, hole.nominal_xy, hole.depth,
-                                hole.clearance, time_limit=time_limit)
+                                hole.clearance, time_limit=time_limit, grasp_along=grasp_along)
         watch = GraspWatch(robot)
         robot.observers.append(watch)
         module.run(record)
@@ -290,7 +316,7 @@ class EpisodeRunner:
         low = min(p + half, p - half, key=lambda v: v[2])
         entrance = cell.hole_position()
         record.insertion_depth_mm = float((entrance[2] - low[2]) * 1000)
-        radial = float(np.linalg.norm(low[:2] - entrance[:2]))
+        radial = vm.norm((low[:2] - entrance[:2]).tolist())
         inserted = (record.insertion_depth_mm >= 0.9 * self.cfg.assembly.insertion_depth * 1000
                     and radial < cell.cfg.hole.radius)
         if record.success and not inserted:

@@ -12,8 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vgs import vecmath as vm
 from vgs.control.robot import Robot
-from vgs.control.transforms import rot_z
+from vgs.control.transforms import matmul, rot_z
 
 MIN_TCP_HEIGHT = 0.013  # pad half-height 11 mm + 2 mm clearance
 PREGRASP_HEIGHT = 0.12
@@ -40,7 +41,7 @@ class GraspResult:
 
 def tool_rotation(yaw: float) -> np.ndarray:
     """``R_world_tcp`` of a top-down grasp with the pads' long side at heading ``yaw``."""
-    return rot_z(yaw) @ R_DOWN
+    return matmul(rot_z(yaw), R_DOWN)
 
 
 def grasp(robot: Robot, x: float, y: float, yaw: float, surface_height: float) -> GraspResult:
@@ -81,4 +82,4 @@ def realised_offset(robot: Robot) -> float:
     """Ground truth (analysis only): pad midpoint minus peg centre, along the peg axis [m]."""
     p_peg, R_peg = robot.cell.peg_pose()
     tcp = robot.cell.data.site_xpos[robot.cell.ids.tcp_site]
-    return float(np.dot(tcp - p_peg, R_peg[:, 2]))
+    return vm.dot((tcp - p_peg).tolist(), R_peg[:, 2].tolist())

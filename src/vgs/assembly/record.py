@@ -19,9 +19,16 @@ class EpisodeRecord:
         seed: Episode seed (cell randomisation and sensor noise).
         peg_mass: Peg mass [kg].
         peg_length: Peg length [m].
+        peg_com_shift_mm: Ground truth: the peg's centre of mass from its middle along the
+            axis, towards its heavy end [mm] (0: uniform).
         grasp_success: Whether the RG2 holds the peg after the lift.
-        grasp_offset: Ground truth: signed distance along the peg axis from the centre of mass
-            to the grasp point [m] (NaN when not grasped). For analysis only.
+        grasp_offset: Ground truth: signed distance along the peg axis from the peg's middle
+            to the grasp point (the pads' midpoint after the lift) [m] (NaN when not
+            grasped). For analysis only.
+        grasp_offset_com: Ground truth: the same from the peg's centre of mass [m] (equal to
+            ``grasp_offset`` on a uniform peg). For analysis only.
+        across_mm: Ground truth (analysis only): the commanded grasp point's distance from
+            the peg's axis across it, in the table plane, when the policy decided [mm].
         success: Whether the peg ended inserted to the insertion depth.
         failure_reason: Empty on success, else what stopped the episode (``grasp``,
             ``timeout:<phase>``, ``peg_lost``, ``unstable``, ``not_inserted``; in training only,
@@ -52,8 +59,11 @@ class EpisodeRecord:
     seed: int
     peg_mass: float
     peg_length: float
+    peg_com_shift_mm: float = 0.0
     grasp_success: bool = False
     grasp_offset: float = math.nan
+    grasp_offset_com: float = math.nan
+    across_mm: float = math.nan
     success: bool = False
     failure_reason: str = ""
     assembly_time: float = math.nan

@@ -7,11 +7,15 @@ and its own hardware (the grasp's moment capacity, the tool's mass); it is not t
 peg is held and does not estimate it. docs/assembly.md states every phase with its numbers.
 
 ``transport``
-    With the peg still horizontal, the sign of the tared F/T moment ``tau_y = -m g c`` about
-    the pads says which end is longer; the wrist turns the peg upright about the pinch axis so
-    that end hangs down, to the same arm/gripper/peg pose for either end, and carries it above
-    the *nominal* hole, high enough for the longest peg the product data allows. Pivots "about
-    the lower end" use the nominal half length from then on.
+    The longer end is the one away from the grasp the cell chose, along the peg the camera
+    perceived: the grasp point's signed distance ``s`` from the perceived middle along the
+    pads' long side (tool x) puts the longer end on the ``-sign(s)`` side. Within
+    ``longer_end_margin`` of the middle the ends are equally long to the perception's
+    precision, and the sign of the tared F/T moment ``tau_y = -m g c`` of the horizontal peg
+    (its centre of mass's side) decides. The wrist turns the peg upright about the pinch axis
+    so that end hangs down, to the same arm/gripper/peg pose for either end, and carries it
+    above the *nominal* hole, high enough for the longest peg the product data allows. Pivots
+    "about the lower end" use the nominal half length from then on.
 ``approach``
     The nominal peg is added to the payload model and the F/T sensor is tared once at this
     upright pose (the payload's weight is compensated from then on). The peg is tilted by the
@@ -61,6 +65,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vgs import vecmath as vm
 from vgs.assembly.contact import (
     ContactPhases,
     PegLost,
@@ -71,23 +76,26 @@ from vgs.assembly.record import EpisodeRecord
 from vgs.config import AssemblyConfig, PegConfig
 from vgs.control.arm import GRAVITY
 from vgs.control.robot import Robot
-from vgs.control.transforms import exp_so3, rot_y, rot_z
+from vgs.control.transforms import exp_so3, matmul, rot_y, rot_z
 from vgs.errors import SimulationError
 from vgs.sim.rg2 import PAD_HALF, grasp_moment_capacity
 
 
 @dataclass
 class PegEstimate:
-    """What the controller believes about the held peg (from F/T and the nominal product data).
+    """What the controller believes about the held peg (from its camera, its F/T sensor and
+    the nominal product data).
 
-    It is not told where the peg is held and does not estimate it: the F/T moment of the
-    horizontal peg says only which end is the longer one, and that end hangs down. Rotations
-    "about the lower end" use the nominal half length as the distance from the pads.
+    It does not estimate how far from the middle the peg is held: the side of the grasp on the
+    perceived peg (or, near the middle, the F/T moment) says only which end is the longer one,
+    and that end hangs down. Rotations "about the lower end" use the nominal half length as
+    the distance from the pads.
     """
 
     weight: float  # measured weight of the held peg [N]
     down_sign: float  # +1: tool +x points down after turning upright
     hanging: float  # assumed distance from the pads to the lower end: L_nominal / 2 [m]
+    source: str = "ft"  # what chose the longer end: "camera" (the grasp's side) or "ft"
 
 
 class AssemblyModule(ContactPhases):
@@ -104,17 +112,23 @@ class AssemblyModule(ContactPhases):
             the phase timeouts are), recording ``cutoff:<phase>``: training uses the reward
             threshold here, when an assembly slower than it earns no assembly reward whatever
             its end. ``None``: run to the end.
+        grasp_along: The chosen grasp point's signed distance from the middle of the peg the
+            camera perceived, along the pads' long side (tool x) [m]: the cell's own
+            perception and its own decision, never the peg's true pose. ``None``: unknown
+            (the F/T moment alone picks the longer end).
     """
 
     def __init__(self, robot: Robot, cfg: AssemblyConfig, nominal_peg: PegConfig,
                  nominal_hole_xy: tuple[float, float], hole_surface_z: float,
-                 hole_clearance: float, time_limit: float | None = None) -> None:
+                 hole_clearance: float, time_limit: float | None = None,
+                 grasp_along: float | None = None) -> None:
         self.robot = robot
+        self.grasp_along = grasp_along
         self.time_limit = time_limit
         self.start = 0.0  # robot time when run() began
         self.cfg = cfg
         self.peg = nominal_peg
-        self.hole_xy = np.asarray(nominal_hole_xy, dtype=float)
+        self.nominal_hole_xy = np.asarray(nominal_hole_xy, dtype=float)
         self.surface_z = hole_surface_z
         self.adjustments = 0
         self.retries = 0
@@ -198,13 +212,22 @@ class AssemblyModule(ContactPhases):
     # -- phases -------------------------------------------------------------------------------
 
     def estimate_peg(self) -> PegEstimate:
-        """Which end of the held, horizontal peg is longer, from the F/T sensor (tared before
-        the grasp): the weight's moment about the pinch axis is ``tau_y = -m g c``, so the
-        sign of ``-tau_y`` is the side of the centre of mass. Only that sign is kept."""
+        """Which end of the held, horizontal peg is longer.
+
+        From the grasp the cell chose on the peg its camera perceived: held at ``s`` from the
+        middle along tool x, the ``-sign(s)`` end is longer by ``2 |s|``. Within
+        ``assembly.longer_end_margin`` of the middle, from the F/T sensor (tared before the
+        grasp): the weight's moment about the pinch axis is ``tau_y = -m g c``, so the sign of
+        ``-tau_y`` is the side of the centre of mass (on a uniform peg the longer end). Only
+        the sign is kept. The measured weight must be at least half the nominal one."""
         w = self.robot.arm.wrench_sensor
         weight = float(w[2])
         if weight < 0.5 * self.peg.mass * GRAVITY:
             raise PegLost
+        s = self.grasp_along
+        if s is not None and abs(s) > self.cfg.longer_end_margin:
+            return PegEstimate(weight=weight, down_sign=-1.0 if s > 0 else 1.0,
+                               hanging=0.5 * self.peg.length, source="camera")
         sign = 1.0 if -w[4] >= 0 else -1.0
         return PegEstimate(weight=weight, down_sign=sign, hanging=0.5 * self.peg.length)
 
@@ -216,22 +239,23 @@ class AssemblyModule(ContactPhases):
         p0, R0 = robot.arm.tcp_pose()
         # Stage 1 (tool still pointing down): yaw about the vertical so that, after stage 2,
         # the tool axis points radially away from the robot base: a wrist-3 motion.
-        radial = math.atan2(self.hole_xy[1], self.hole_xy[0])
+        radial = math.atan2(self.nominal_hole_xy[1], self.nominal_hole_xy[0])
         x_heading = radial if est.down_sign < 0 else radial + math.pi
         yaw_now = math.atan2(R0[1, 0], R0[0, 0])
         dyaw = (x_heading - yaw_now + math.pi) % (2 * math.pi) - math.pi
-        R_yaw = rot_z(dyaw) @ R0
+        R_yaw = matmul(rot_z(dyaw), R0)
         # Stage 2: roll about the pinch axis (tool y) so that the longer part hangs down. For
         # either end the arm, the gripper and the peg end in the same pose (the tool frames
         # differ by a half turn about the tool axis, which swaps the fingers).
-        R_asm = R_yaw @ rot_y(-est.down_sign * math.pi / 2)
+        R_asm = matmul(R_yaw, rot_y(-est.down_sign * math.pi / 2))
         self.R_asm = R_asm
         # The pinch axis as a world direction that does not depend on which end hangs down:
         # every tilt, lean and slide below is the same motion for both.
         self.tilt_axis = est.down_sign * R_asm[:, 1]
+        self._tilt_axis_t = vm.vec3(self.tilt_axis)
         # High enough for the longest peg the product data allows with the pads at its end.
         clearance = self.peg.length * (1.0 + cfg.length_tolerance) + 0.01
-        target = np.array([*self.hole_xy, self.surface_z + clearance])
+        target = np.array([*self.nominal_hole_xy, self.surface_z + clearance])
         lift = p0 + np.array([0.0, 0.0, 0.06])
         robot.move_to(lift, R_yaw, speed=0.2, angular_speed=1.5, settle=0.0)
         self._check_grasp()
@@ -268,13 +292,14 @@ class AssemblyModule(ContactPhases):
         psi = math.radians(cfg.search_tilt_deg)
         Rt = exp_so3(psi * axis)
         tip = p + est.hanging * est.down_sign * R[:, 0]
-        R_tilt = Rt @ R
-        p_tilt = tip + Rt @ (p - tip)
+        R_tilt = matmul(Rt, R)
+        p_tilt = tip + np.array(vm.mv(vm.mat3(Rt), (p - tip).tolist()))
         # Plane contact where the lowest rim point is certainly on the surface: further from
         # the nominal centre than the hole's radius plus its largest displacement (its radius).
         rim = self._lowest_rim_offset(R_tilt)
-        lead = rim[:2] / max(float(np.linalg.norm(rim[:2])), 1e-9)
-        target_xy = self.hole_xy + (2.0 * self.hole_radius + cfg.plane_contact_margin) * lead
+        lead = rim[:2] / max(vm.norm(rim[:2].tolist()), 1e-9)
+        reach = 2.0 * self.hole_radius + cfg.plane_contact_margin
+        target_xy = self.nominal_hole_xy + reach * lead
         # Place the lowest rim point above the target at the start height.
         low = tip + rim
         # Down to where the longest peg the product data allows, held at its end, would be

@@ -99,6 +99,43 @@ def cmd_grasp_sites(args: argparse.Namespace, cfg: ExperimentConfig | None) -> i
     return 0
 
 
+def cmd_com_fit(args: argparse.Namespace, cfg: ExperimentConfig | None) -> int:
+    """Fit a shifted-mass sweep's times against the grasp's distances from the middle and from
+    the centre of mass, beside its uniform twin (issue 55)."""
+
+    from vgs.analysis.comfit import analyse, markdown
+    from vgs.errors import ConfigError
+    from vgs.jsonsafe import dumps
+    from vgs.runfolder.common import read_table
+
+    tables = []
+    for folder in (args.dir, args.twin):
+        if folder is None:
+            tables.append(None)
+            continue
+        path = Path(folder) / "sweep.csv"
+        if not path.is_file():
+            raise ConfigError("dir", f"{folder} holds no sweep.csv (a vgs sweep folder)")
+        df = read_table(path)
+        need = {"offset_mm", "trial", "assembly_success", "assembly_time_s", "time_align_s",
+                "grasp_offset_mm", "grasp_offset_com_mm", "peg_com_shift_mm"}
+        missing = sorted(need - set(df.columns))
+        if missing:
+            raise ConfigError("dir", f"{path} lacks {', '.join(missing)} (a sweep made "
+                                     "before the peg's centre of mass was recorded)")
+        tables.append(df)
+    doc = analyse(tables[0], tables[1])
+    text = markdown(doc)
+    print(text, end="")
+    if args.out:
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "com_fit.md").write_text(text)
+        (out / "com_fit.json").write_text(dumps(doc, indent=1) + "\n")
+        print(f"wrote {out / 'com_fit.md'}, {out / 'com_fit.json'}")
+    return 0
+
+
 def cmd_status(args: argparse.Namespace, cfg: ExperimentConfig | None) -> int:
     """Print the progress of the jobs in a reproduce, train or evaluate folder."""
     from vgs.runfolder.status import format_status

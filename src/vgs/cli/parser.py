@@ -13,6 +13,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from vgs.cli.folders import (
+    cmd_com_fit,
     cmd_curves,
     cmd_export_policy,
     cmd_grasp_sites,
@@ -90,6 +91,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_report(sub)
     _add_seeds(sub)
     _add_grasp_sites(sub)
+    _add_com_fit(sub)
     _add_status(sub)
     _add_config(sub)
     return parser
@@ -111,6 +113,9 @@ def _add_demo(sub: Any) -> None:
                       help="grasp with this policy instead: a training run or policy folder "
                            "(its Q heat map beside the video and in the figure), random, center "
                            "or module:function, choosing as vgs evaluate does")
+    demo.add_argument("--condition", default="nominal", choices=CONDITIONS,
+                      help="the episode's peg: a test condition's, at the far end of its range "
+                           "(mass and length +15 %%, com-spread 20 mm; default: %(default)s)")
     demo.add_argument("--video", metavar="FILE",
                       help="also render the episode from the perspective camera to FILE (.mp4 "
                            "or .gif), phase and F/T reading on every frame; needs OpenGL "
@@ -305,6 +310,16 @@ def _add_grasp_sites(sub: Any) -> None:
                                                      "(along_mm, across_mm) to FILE")
     sites.add_argument("--no-progress", action="store_true", help="no progress bar")
     sites.set_defaults(func=cmd_grasp_sites)
+
+
+def _add_com_fit(sub: Any) -> None:
+    """``vgs com-fit``."""
+    fit = sub.add_parser("com-fit", help="does a shifted-mass sweep's time follow the grasp's "
+                                         "distance from the centre of mass or from the middle")
+    fit.add_argument("dir", help="a vgs sweep folder of a peg with peg.com_shift_mm > 0")
+    fit.add_argument("--twin", help="the same sweep (scenes, offsets) of the uniform peg")
+    fit.add_argument("--out", help="also write com_fit.md and com_fit.json here")
+    fit.set_defaults(func=cmd_com_fit)
 
 
 def _add_status(sub: Any) -> None:

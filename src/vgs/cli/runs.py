@@ -30,11 +30,13 @@ def cmd_demo(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
 
         require_video_writer(args.video)  # before the episode, not after it
         require_gl()
+    from vgs.config import condition_peg
     from vgs.tools.demo import format_report, run_demo
     from vgs.tools.demofigure import demo_figure
 
     seed = cfg.seed if args.seed is None else args.seed
-    result = run_demo(cfg, seed, args.offset / 1000.0, policy=args.policy)
+    peg = condition_peg(cfg.cell.peg, cfg.eval, args.condition, 1.0)
+    result = run_demo(cfg, seed, args.offset / 1000.0, policy=args.policy, peg=peg)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     figure = demo_figure(result, out / "demo.png")

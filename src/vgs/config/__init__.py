@@ -27,7 +27,9 @@ from vgs.config.cell import (
     SimConfig,
 )
 from vgs.config.conditions import (
+    COM_CONDITIONS,
     CONDITIONS,
+    PAPER_CONDITIONS,
     EvalConfig,
     EvalScene,
     condition_peg,
@@ -60,7 +62,8 @@ from vgs.config.tree import (
 )
 
 __all__ = [
-    "ACTIONS", "BACKBONES", "CONDITIONS", "NO_SUCH_FIELD", "PRECISIONS", "PROFILES",
+    "ACTIONS", "BACKBONES", "COM_CONDITIONS", "CONDITIONS", "PAPER_CONDITIONS", "NO_SUCH_FIELD",
+    "PRECISIONS", "PROFILES",
     "ROTATE_MODES", "AgentConfig", "AssemblyConfig", "CameraConfig", "CellConfig",
     "ControllerConfig", "EvalConfig", "EvalScene", "ExperimentConfig", "FTSensorConfig",
     "GripperConfig", "HoleConfig", "NetworkConfig", "PegConfig", "ReproduceConfig", "RewardConfig",

@@ -8,6 +8,8 @@ from dataclasses import dataclass, field
 from vgs.config.checks import check_non_negative, check_positive, is_finite, shown
 from vgs.errors import ConfigError
 
+COM_MARKINGS = ("visible", "hidden")
+
 
 @dataclass(frozen=True)
 class PegConfig:
@@ -18,17 +20,35 @@ class PegConfig:
         length: Peg length [m].
         mass: Peg mass [kg].
         friction: Sliding friction coefficient of the peg surface.
+        com_shift_mm: Distance of the centre of mass from the middle along the axis, towards
+            the heavy end [mm] (0: a uniform peg). A denser insert fills the last quarter of
+            the length at that end (the outer shape is unchanged), so the shift can reach
+            3/8 of the length less 1 mm (the insert's centre). Ground truth: the controller
+            knows the nominal peg only.
+        com_marking: ``visible``: the heavy end's last 10 mm painted blue (a coat 0.3 mm thick
+            the camera sees); ``hidden``: no mark. Only with a shift.
     """
 
     diameter: float = 0.030
     length: float = 0.100
     mass: float = 0.55
     friction: float = 0.4
+    com_shift_mm: float = 0.0
+    com_marking: str = "visible"
 
     def __post_init__(self) -> None:
         check_positive(self, "diameter", "length", "mass", "friction", prefix="peg.")
         if self.length < 2 * 0.025:
             raise ConfigError("peg.length", "must be at least 50 mm so the RG2 pads fit on it")
+        shift = self.com_shift_mm
+        limit = 375.0 * self.length - 1.0  # 3/8 of the length [mm], less 1 mm
+        if isinstance(shift, bool) or not isinstance(shift, (int, float)) \
+                or not math.isfinite(shift) or not 0.0 <= shift <= limit:
+            raise ConfigError("peg.com_shift_mm", f"must lie in [0, {limit:g}] mm (3/8 of the "
+                                                  f"length less 1 mm), got {shift!r}")
+        if self.com_marking not in COM_MARKINGS:
+            raise ConfigError("peg.com_marking", f"must be one of {', '.join(COM_MARKINGS)}, "
+                                                 f"got {self.com_marking!r}")
 
     @property
     def radius(self) -> float:

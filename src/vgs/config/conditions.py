@@ -6,7 +6,18 @@ each draws, and the seeded test scenes every policy meets.
 * ``length``: ``L = L0 (1 + b u)`` with ``b = eval.length_range`` (0.15) and the mass following
   the volume, ``m = m0 L / L0``;
 
-with ``u`` uniform in [-1, 1]. Test scene ``i`` of root seed ``S`` is fully determined by
+with ``u`` uniform in [-1, 1]; and a family whose centre of mass is not the middle (the
+paper's reason for learning the grasp, 2.2), the heavy end's direction random per scene with
+the peg's random yaw:
+
+* ``com``: the peg's centre of mass ``eval.com_shift_mm`` (20 mm) from its middle, its heavy
+  end painted (``peg.com_marking = visible``);
+* ``com-hidden``: the same, unmarked;
+* ``com-spread``: a manufacturing spread, the shift ``eval.com_spread_mm * |u|`` (so along
+  any fixed direction of the peg uniform within +-20 mm), unmarked.
+
+``vgs reproduce`` runs the paper's three (:data:`PAPER_CONDITIONS`) unless told otherwise.
+Test scene ``i`` of root seed ``S`` is fully determined by
 ``(S, i)``: its episode seed (peg pose, hole displacement, sensor noise) is the first word of
 ``numpy.random.SeedSequence([S, i, EVAL_STREAM])`` (the tag keeps test scenes apart from the
 training scenes ``SeedSequence([S, i])`` of a run with the same root seed), and a child of that
@@ -26,7 +37,9 @@ from vgs.config.cell import PegConfig
 from vgs.config.checks import check_fraction
 from vgs.errors import ConfigError
 
-CONDITIONS = ("nominal", "mass", "length")
+PAPER_CONDITIONS = ("nominal", "mass", "length")
+COM_CONDITIONS = ("com", "com-hidden", "com-spread")
+CONDITIONS = PAPER_CONDITIONS + COM_CONDITIONS
 EVAL_STREAM = 0xE7A1  # tags the seed sequences of test episodes
 
 
@@ -39,16 +52,26 @@ class EvalConfig:
         mass_range: The ``mass`` condition's peg mass factor is uniform in 1 +- this.
         length_range: The ``length`` condition's peg length factor is uniform in 1 +- this; the
             mass follows the length.
+        com_shift_mm: The ``com`` and ``com-hidden`` conditions' centre of mass, from the
+            peg's middle along its axis [mm].
+        com_spread_mm: The ``com-spread`` condition's largest shift [mm] (``|u|`` of it).
     """
 
     episodes: int = 1000
     mass_range: float = 0.15
     length_range: float = 0.15
+    com_shift_mm: float = 20.0
+    com_spread_mm: float = 20.0
 
     def __post_init__(self) -> None:
         if self.episodes < 1:
             raise ConfigError("eval.episodes", "must be >= 1")
         check_fraction(self, "mass_range", "length_range", prefix="eval.")
+        for name in ("com_shift_mm", "com_spread_mm"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                    or not 0.0 <= value <= 36.0:
+                raise ConfigError(f"eval.{name}", f"must lie in [0, 36] mm, got {value!r}")
 
 
 @dataclass(frozen=True)
@@ -71,7 +94,8 @@ def condition_peg(nominal: PegConfig, evaluation: EvalConfig, condition: str,
     """The peg of a test condition for a draw ``factor`` (``u``) in [-1, 1].
 
     ``nominal``: ``nominal``; ``mass``: its mass times ``1 + evaluation.mass_range * u``;
-    ``length``: its length times ``1 + evaluation.length_range * u``, the mass following.
+    ``length``: its length times ``1 + evaluation.length_range * u``, the mass following;
+    ``com``, ``com-hidden``, ``com-spread``: its centre of mass shifted (module docstring).
 
     Raises:
         ConfigError: ``condition`` if it is not one of :data:`CONDITIONS`.
@@ -83,6 +107,13 @@ def condition_peg(nominal: PegConfig, evaluation: EvalConfig, condition: str,
     if condition == "length":
         scale = 1.0 + evaluation.length_range * factor
         return replace(nominal, length=nominal.length * scale, mass=nominal.mass * scale)
+    if condition == "com":
+        return replace(nominal, com_shift_mm=evaluation.com_shift_mm, com_marking="visible")
+    if condition == "com-hidden":
+        return replace(nominal, com_shift_mm=evaluation.com_shift_mm, com_marking="hidden")
+    if condition == "com-spread":
+        return replace(nominal, com_shift_mm=evaluation.com_spread_mm * abs(factor),
+                       com_marking="hidden")
     raise ConfigError("condition", f"must be one of {CONDITIONS}, got {condition!r}")
 
 

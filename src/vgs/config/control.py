@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 from vgs.config.checks import check_fraction, check_non_negative, check_positive
 from vgs.errors import ConfigError
@@ -126,6 +127,11 @@ class AssemblyConfig:
             moves [s].
         length_tolerance: The product data's length tolerance, a fraction of the nominal
             length: the transport and the approach clear the longest peg it allows.
+        longer_end_margin: The transport hangs the peg's longer end down, the end away from
+            the chosen grasp point along the peg the camera perceived, when the grasp lies
+            more than this from the perceived middle [m]; within it the two ends are equally
+            long to the perception's precision (two pixels of the 2 mm heightmap) and the F/T
+            moment of the horizontal peg picks the side of its centre of mass.
         lost_width_fraction: The grasp watch: a finger width below this fraction of the peg's
             nominal diameter means the peg is lost.
         retry_lift: Lift of the TCP, above the first plane contact at least, before a new
@@ -169,6 +175,10 @@ class AssemblyConfig:
             rocked the peg by tenths of a degree.
     """
 
+    # A configuration recorded before longer_end_margin existed was run by a controller whose
+    # F/T moment always picked the longer end: a margin of 1 m (every grasp lies within it).
+    RECORDED_BEFORE: ClassVar[dict[str, float]] = {"longer_end_margin": 1.0}
+
     insertion_depth: float = 0.030
     approach_height: float = 0.010
     approach_speed: float = 0.01
@@ -193,6 +203,7 @@ class AssemblyConfig:
     entry_depth: float = 0.004
     settle_time: float = 0.3
     length_tolerance: float = 0.15
+    longer_end_margin: float = 0.004
     lost_width_fraction: float = 0.8
     retry_lift: float = 0.012
     rot_compliance_angle_deg: float = 2.0
@@ -233,7 +244,8 @@ class AssemblyConfig:
             "hop_rot_stiffness", prefix="assembly.",
         )
         check_non_negative(
-            self, "entry_depth", "settle_time", "length_tolerance", "retry_lift",
+            self, "entry_depth", "settle_time", "length_tolerance", "longer_end_margin",
+            "retry_lift",
             "slide_settle_time", "climb_travel", "plane_contact_margin", "hop_height",
             "hop_press_time", "hop_settle_time", prefix="assembly.",
         )

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from vgs.config.cell import CellConfig
-from vgs.config.conditions import CONDITIONS, EvalConfig
+from vgs.config.conditions import CONDITIONS, PAPER_CONDITIONS, EvalConfig
 from vgs.config.control import AssemblyConfig, ControllerConfig
 from vgs.config.learning import AgentConfig, NetworkConfig, RewardConfig, TrainConfig
 from vgs.errors import ConfigError
@@ -27,7 +27,7 @@ class ReproduceConfig:
     """
 
     train_seeds: tuple[int, ...] = (0,)
-    conditions: tuple[str, ...] = CONDITIONS
+    conditions: tuple[str, ...] = PAPER_CONDITIONS
     reference_policies: tuple[str, ...] = ("center",)
     sweep_offsets: int = 9
     sweep_trials: int = 20

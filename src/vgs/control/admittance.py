@@ -39,8 +39,11 @@ class Admittance:
         self.velocity = np.zeros(6)
         self.wrench_des = np.zeros(6)
         self.vmax = np.array([cfg.max_speed] * 3 + [cfg.max_angular_speed] * 3)
-        self._force = np.zeros(6)  # work arrays, reused every step
-        self._denom = np.zeros(6)
+        # Per-axis constants as Python floats, cached per dt (set_stiffness clears them).
+        self._denom_t: list[float] = []
+        self._stiff_t: list[float] = []
+        self._mass_t: list[float] = []
+        self._vmax_t: list[float] = []
         self._denom_dt = -1.0
         self.set_stiffness(np.array([cfg.trans_stiffness] * 3 + [cfg.rot_stiffness] * 3))
 
@@ -73,22 +76,32 @@ class Admittance:
         self.wrench_des[:] = 0.0
 
     def step(self, wrench_ext: np.ndarray, dt: float) -> np.ndarray:
-        """Advance the offset by ``dt`` (semi-implicit Euler, damping implicit) and return it."""
+        """Advance the offset by ``dt`` (semi-implicit Euler, damping implicit) and return it.
+
+        Per axis, on Python floats::
+
+            f = ((w_des - K e) + w_ext) dt
+            v = (M v + f) / (M + D dt),   clipped to +-v_max
+            e = e + v dt
+
+        ``(M + D dt) v_new = M v + f``: unconditionally stable in the damping term.
+        """
         if dt != self._denom_dt:
-            np.multiply(self.damping, dt, out=self._denom)
-            self._denom += self.mass
+            self._denom_t = [d * dt + m for d, m in zip(self.damping.tolist(),
+                                                        self.mass.tolist(), strict=True)]
+            self._stiff_t = self.stiffness.tolist()
+            self._mass_t = self.mass.tolist()
+            self._vmax_t = self.vmax.tolist()
             self._denom_dt = dt
-        force, v = self._force, self.velocity
-        # force = w_ext + w_des - K e
-        np.multiply(self.stiffness, self.offset, out=force)
-        np.subtract(self.wrench_des, force, out=force)
-        force += wrench_ext
-        # (M + D dt) v_new = M v + force dt: unconditionally stable in the damping term.
-        force *= dt
-        v *= self.mass
-        v += force
-        v /= self._denom
-        np.minimum(v, self.vmax, out=v)
-        np.maximum(v, -self.vmax, out=v)
-        self.offset += v * dt
+        K, M, den, vmax = self._stiff_t, self._mass_t, self._denom_t, self._vmax_t
+        e, v = self.offset.tolist(), self.velocity.tolist()
+        wd, w = self.wrench_des.tolist(), wrench_ext.tolist()
+        for i in range(6):
+            vi = (v[i] * M[i] + ((wd[i] - K[i] * e[i]) + w[i]) * dt) / den[i]
+            vm = vmax[i]
+            vi = max(min(vi, vm), -vm)
+            v[i] = vi
+            e[i] = e[i] + vi * dt
+        self.velocity[:] = v
+        self.offset[:] = e
         return self.offset

@@ -23,9 +23,9 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+from vgs import vecmath as vm
 from vgs.config import ControllerConfig
 from vgs.control.admittance import Admittance
-from vgs.control.transforms import exp_so3, log_so3_tuple
 from vgs.sim.cell import Cell
 from vgs.sim.ft_sensor import FTSensor
 
@@ -38,6 +38,10 @@ MAX_JOINT_SPEED = np.pi
 
 class ArmController:
     """Cartesian admittance control of the UR5 through its joint servos.
+
+    The per-tick maths is written on Python floats (:mod:`vgs.vecmath`) and MuJoCo's own
+    routines (``mju_mulMatTMat``, ``mju_mulMatTVec``, ``mju_cholFactor``, ``mju_cholSolve``),
+    never numpy's BLAS products, so that a tick gives the same bits on every CPU.
 
     Args:
         cell: The simulated cell (the controller touches only joint state, actuators and the
@@ -53,65 +57,64 @@ class ArmController:
         self.admittance = Admittance(cfg)
         m, d, ids = cell.model, cell.data, cell.ids
         self.wrench = np.zeros(6)  # tared external wrench at the TCP, world frame
-        self._wrench_f, self._wrench_m = self.wrench[:3], self.wrench[3:]
         self.wrench_sensor = np.zeros(6)  # tared external wrench, sensor frame
-        self._sensor_f, self._sensor_m = self.wrench_sensor[:3], self.wrench_sensor[3:]
         self.compliant = False  # False: the F/T signal does not drive the admittance
         self._scratch = mujoco.MjData(m)
-        # Views and work arrays reused every tick (numpy's per-call overhead dominates on
-        # 6-vectors; fancy indexing and fresh arrays would cost more than the arithmetic).
+        # Views and work arrays reused every tick.
         self._qpos = _block(d.qpos, ids.arm_qpos)
         self._ctrl = _block(d.ctrl, ids.arm_act)
         self._sqpos = _block(self._scratch.qpos, ids.arm_qpos)
         self._tcp_xpos = d.site_xpos[ids.tcp_site]
-        self._tcp_xmat = d.site_xmat[ids.tcp_site].reshape(3, 3)
+        self._tcp_xmat = d.site_xmat[ids.tcp_site]
         self._ft_xpos = d.site_xpos[ids.ft_site]
-        self._ft_xmat = d.site_xmat[ids.ft_site].reshape(3, 3)
+        self._ft_xmat = d.site_xmat[ids.ft_site]
         self._s_tcp_xpos = self._scratch.site_xpos[ids.tcp_site]
-        self._s_R_tcp_world = self._scratch.site_xmat[ids.tcp_site].reshape(3, 3).T
+        self._s_tcp_xmat = self._scratch.site_xmat[ids.tcp_site]
         self._model, self._tcp_site = m, ids.tcp_site
         if ids.ft_torque_adr != ids.ft_force_adr + 3:
             raise ValueError("the F/T force and torque sensors must be adjacent")
         self._raw = d.sensordata[ids.ft_force_adr:ids.ft_force_adr + 6]
-        self._z_world_in_ft = self._ft_xmat[2]  # third row of R_world_ft: world z, ft frame
         self._jac = np.zeros((6, m.nv))  # rows: translation, rotation
         self._jac_p, self._jac_r = self._jac[:3], self._jac[3:]
-        self._J = _block(self._jac.T, ids.arm_dof).T  # a view: follows mj_jacSite's output
-        self._JT = self._J.T
+        self._J_view = _block(self._jac.T, ids.arm_dof).T  # follows mj_jacSite's output
+        self._J = np.zeros((6, 6))  # its contiguous copy, MuJoCo's routines' operand
         self._err = np.zeros(6)
         self._H = np.zeros((6, 6))
         self._g = np.zeros(6)
         self._dq = np.zeros(6)
         self._damp = DLS_LAMBDA**2 * np.eye(6)
-        self._Rerr = np.zeros((3, 3))
-        self.p_ref, self.R_ref = self.tcp_pose()
+        p, R = self.tcp_pose_t()
+        self._p_ref: vm.Vec3 = p
+        self._R_ref: vm.Mat3 = R
         self.q_cmd = self.joint_positions()
         # Gravity compensation of the payload below the sensor (see tare()).
         self._tool_mass, self._tool_com = tool_inertial(cell)
-        self._p_ft_tcp = self._ft_xmat.T @ (self._tcp_xpos - self._ft_xpos)
+        self._p_ft_tcp = vm.mtv(vm.mat3(self._ft_xmat),
+                                vm.sub(self._tcp_xpos.tolist(), self._ft_xpos.tolist()))
         self.payload_mass = self._tool_mass
-        self.payload_com = self._tool_com.copy()
-        self._payload_com_t = tuple(self.payload_com.tolist())
-        self._g_tare = np.zeros(6)
-        self._g_now = np.zeros(6)
+        self.payload_com: vm.Vec3 = self._tool_com
+        self._g_tare: tuple[float, ...] = (0.0,) * 6
         self._compensate = False
 
     def set_payload(self, peg_mass: float) -> None:
         """Compensate a held peg of ``peg_mass`` as if its centre of mass lay at the TCP (the
-        pads) besides the tool's own load; takes effect at the next :meth:`tare`."""
+        pads) besides the tool's own load; takes effect at the next :meth:`tare`:
+        ``c = (m_tool c_tool + m_peg p_tcp) / (m_tool + m_peg)`` (sensor frame)."""
         m = self._tool_mass + peg_mass
-        self.payload_com = (self._tool_mass * self._tool_com + peg_mass * self._p_ft_tcp) / m
-        self._payload_com_t = tuple(self.payload_com.tolist())
+        mt = self._tool_mass
+        c, p = self._tool_com, self._p_ft_tcp
+        self.payload_com = ((mt * c[0] + peg_mass * p[0]) / m, (mt * c[1] + peg_mass * p[1]) / m,
+                            (mt * c[2] + peg_mass * p[2]) / m)
         self.payload_mass = m
 
     def _gravity_wrench(self) -> tuple[float, float, float, float, float, float]:
         """The payload's weight as an external wrench on the tool, sensor frame:
-        ``f = R_world_ft^T (0, 0, -m g)``, ``tau = c x f`` (scalar arithmetic: numpy's
-        cross product costs more than the whole sum on 3-vectors)."""
+        ``f = R_world_ft^T (0, 0, -m g)`` (the third row of ``R_world_ft`` times ``-m g``),
+        ``tau = c x f``."""
         w = -GRAVITY * self.payload_mass
-        zx, zy, zz = self._z_world_in_ft.tolist()
+        zx, zy, zz = self._ft_xmat[6:9].tolist()
         gx, gy, gz = w * zx, w * zy, w * zz
-        cx, cy, cz = self._payload_com_t
+        cx, cy, cz = self.payload_com
         return gx, gy, gz, cy * gz - cz * gy, cz * gx - cx * gz, cx * gy - cy * gx
 
     def tare(self) -> None:
@@ -126,7 +129,7 @@ class ArmController:
         contact moment.
         """
         self.ft.tare()
-        self._g_tare[:] = self._gravity_wrench()
+        self._g_tare = self._gravity_wrench()
         self._compensate = True
 
     def set_compliant(self, on: bool) -> None:
@@ -139,8 +142,15 @@ class ArmController:
 
     def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """``(p_world_tcp, R_world_tcp)`` from the measured joint angles."""
-        d, s = self.cell.data, self.cell.ids.tcp_site
-        return d.site_xpos[s].copy(), d.site_xmat[s].reshape(3, 3).copy()
+        return self._tcp_xpos.copy(), self._tcp_xmat.reshape(3, 3).copy()
+
+    def tcp_pose_t(self) -> tuple[vm.Vec3, vm.Mat3]:
+        """:meth:`tcp_pose` as plain floats (a 3-tuple and a flat row-major 9-tuple)."""
+        return tuple(self._tcp_xpos.tolist()), tuple(self._tcp_xmat.tolist())  # type: ignore
+
+    def tcp_position(self) -> vm.Vec3:
+        """``p_world_tcp`` from the measured joint angles, as plain floats."""
+        return tuple(self._tcp_xpos.tolist())  # type: ignore[return-value]
 
     def tcp_height(self) -> float:
         """Height of the TCP from the measured joint angles [m] (no copies)."""
@@ -153,50 +163,66 @@ class ArmController:
         """Sample the F/T sensor; update and return the world-frame wrench at the TCP.
 
         The sensor's wrench, less the change of the payload's weight since the tare
-        (``w - W_g(R) + W_g(R_tare)``), is turned into the world frame by ``R_world_ft`` (numpy's
-        matrix product) and moved from the sensor's origin to the TCP:
-        ``tau_tcp = tau_ft + (p_ft - p_tcp) x f`` (plain floats, rounded as numpy's element-wise
-        operations round)."""
+        (``(w - W_g(R)) + W_g(R_tare)``), is turned into the world frame by ``R_world_ft`` and
+        moved from the sensor's origin to the TCP: ``tau_tcp = tau_ft + (p_ft - p_tcp) x f``
+        (plain floats)."""
         w = self.ft.sample(self._raw)
         if self._compensate:
-            self._g_now[:] = self._gravity_wrench()
-            np.subtract(w, self._g_now, out=self.wrench_sensor)
-            self.wrench_sensor += self._g_tare
-        else:
-            self.wrench_sensor[:] = w
-        R_world_ft = self._ft_xmat
-        wrench = self.wrench
-        f0, f1, f2 = np.matmul(R_world_ft, self._sensor_f, out=self._wrench_f).tolist()
-        m0, m1, m2 = np.matmul(R_world_ft, self._sensor_m, out=self._wrench_m).tolist()
+            g, t = self._gravity_wrench(), self._g_tare
+            w = ((w[0] - g[0]) + t[0], (w[1] - g[1]) + t[1], (w[2] - g[2]) + t[2],
+                 (w[3] - g[3]) + t[3], (w[4] - g[4]) + t[4], (w[5] - g[5]) + t[5])
+        self.wrench_sensor[:] = w
+        R_world_ft = tuple(self._ft_xmat.tolist())
+        f0, f1, f2 = vm.mv(R_world_ft, w[0:3])
+        m0, m1, m2 = vm.mv(R_world_ft, w[3:6])
         x0, x1, x2 = self._ft_xpos.tolist()
         y0, y1, y2 = self._tcp_xpos.tolist()
         r0, r1, r2 = x0 - y0, x1 - y1, x2 - y2
-        self._wrench_m[:] = (m0 + (r1 * f2 - r2 * f1), m1 + (r2 * f0 - r0 * f2),
-                             m2 + (r0 * f1 - r1 * f0))
-        return wrench
+        self.wrench[:] = (f0, f1, f2, m0 + (r1 * f2 - r2 * f1), m1 + (r2 * f0 - r0 * f2),
+                          m2 + (r0 * f1 - r1 * f0))
+        return self.wrench
 
     # -- commands ---------------------------------------------------------------------------
 
-    def set_reference(self, p: np.ndarray, R: np.ndarray) -> None:
-        self.p_ref = np.array(p, dtype=float)
-        self.R_ref = np.array(R, dtype=float)
+    @property
+    def p_ref(self) -> np.ndarray:
+        """The reference position ``p_world_ref`` [m] (a fresh array)."""
+        return np.array(self._p_ref)
+
+    @property
+    def R_ref(self) -> np.ndarray:
+        """The reference attitude ``R_world_ref`` (a fresh 3x3 array)."""
+        return vm.array3(self._R_ref)
+
+    @property
+    def reference_t(self) -> tuple[vm.Vec3, vm.Mat3]:
+        """The reference pose as plain floats."""
+        return self._p_ref, self._R_ref
+
+    def set_reference(self, p: np.ndarray | vm.Vec3, R: np.ndarray | vm.Mat3) -> None:
+        """Set the reference pose (arrays, or a 3-tuple and a flat 9-tuple)."""
+        self._p_ref = p if isinstance(p, tuple) else vm.vec3(p)
+        self._R_ref = R if isinstance(R, tuple) else vm.mat3(R)
+
+    def _commanded_t(self) -> tuple[vm.Vec3, vm.Mat3]:
+        """``(p_cmd, R_cmd)``: the reference displaced by the compliant offset,
+        ``p_ref + e_p`` and ``exp([e_r]_x) R_ref`` (``R_ref`` itself while ``e_r`` is zero, as
+        it is whenever the arm is not compliant)."""
+        e0, e1, e2, rx, ry, rz = self.admittance.offset.tolist()
+        px, py, pz = self._p_ref
+        p = (px + e0, py + e1, pz + e2)
+        if rx == 0.0 and ry == 0.0 and rz == 0.0:
+            return p, self._R_ref
+        return p, vm.mm(vm.exp_so3((rx, ry, rz)), self._R_ref)
 
     def commanded_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(p_cmd, R_cmd)``: the reference displaced by the compliant offset,
-        ``p_ref + e_p`` and ``exp([e_r]_x) R_ref``."""
-        e = self.admittance.offset
-        return self.p_ref + e[:3], self._commanded_rotation(*e[3:].tolist())
-
-    def _commanded_rotation(self, rx: float, ry: float, rz: float) -> np.ndarray:
-        """``exp([e_r]_x) R_ref`` for the rotation offset ``e_r = (rx, ry, rz)`` (``R_ref``
-        itself while it is zero, as it is whenever the arm is not compliant)."""
-        if rx == 0.0 and ry == 0.0 and rz == 0.0:
-            return self.R_ref
-        return exp_so3((rx, ry, rz)) @ self.R_ref
+        """``(p_cmd, R_cmd)`` as arrays (see :meth:`_commanded_t`)."""
+        p, R = self._commanded_t()
+        return np.array(p), vm.array3(R)
 
     def absorb_offset(self) -> None:
         """Move the compliant offset into the reference (the commanded pose is unchanged)."""
-        self.p_ref, self.R_ref = self.commanded_pose()
+        self._p_ref, self._R_ref = self._commanded_t()
         self.admittance.offset[:] = 0.0
         self.admittance.velocity[:] = 0.0
 
@@ -205,12 +231,9 @@ class ArmController:
         self.read_ft()
         if self.compliant:
             self.admittance.step(self.wrench, dt)
-        e0, e1, e2, rx, ry, rz = self.admittance.offset.tolist()
-        px, py, pz = self.p_ref.tolist()
-        px, py, pz = px + e0, py + e1, pz + e2  # p_cmd, as numpy's sum rounds
-        R_cmd = self._commanded_rotation(rx, ry, rz)
+        (px, py, pz), R_cmd = self._commanded_t()
         m, sd, site = self._model, self._scratch, self._tcp_site
-        J, JT, err, H, g, dq = self._J, self._JT, self._err, self._H, self._g, self._dq
+        J, H, g, dq, err = self._J, self._H, self._g, self._dq, self._err
         step_max = MAX_JOINT_SPEED * dt
         q = self.q_cmd
         for k in range(IK_ITERATIONS):
@@ -221,16 +244,18 @@ class ArmController:
                 # factorisation (a chord step: |dq| <= pi dt per joint, so J barely changes).
                 mujoco.mj_comPos(m, sd)
                 mujoco.mj_jacSite(m, sd, self._jac_p, self._jac_r, site)
+                J[:] = self._J_view
                 # Damped least squares: dq = (J^T J + lambda^2 I)^-1 J^T err, Cholesky-factored
-                # (the matrix is symmetric positive definite).
-                np.matmul(JT, J, out=H)
+                # (the matrix is symmetric positive definite); MuJoCo's own products.
+                mujoco.mju_mulMatTMat(H, J, J)
                 H += self._damp
                 mujoco.mju_cholFactor(H, 0.0)
             x, y, z = self._s_tcp_xpos.tolist()
-            np.matmul(R_cmd, self._s_R_tcp_world, out=self._Rerr)
-            e = (px - x, py - y, pz - z, *log_so3_tuple(self._Rerr))
+            # Attitude error log(R_cmd R(q)^T).
+            rx, ry, rz = vm.log_so3(vm.mmt(R_cmd, tuple(self._s_tcp_xmat.tolist())))
+            e = (px - x, py - y, pz - z, rx, ry, rz)
             err[:] = e
-            np.matmul(JT, err, out=g)
+            mujoco.mju_mulMatTVec(g, J, err)
             mujoco.mju_cholSolve(dq, H, g)
             steps = dq.tolist()
             if max(steps) > step_max or min(steps) < -step_max:  # clip only where it acts
@@ -242,7 +267,7 @@ class ArmController:
         self._ctrl[:] = q
 
 
-def tool_inertial(cell: Cell) -> tuple[float, np.ndarray]:
+def tool_inertial(cell: Cell) -> tuple[float, vm.Vec3]:
     """Mass and centre of mass (sensor frame) of everything below the F/T sensor's site: the
     robot's own tool (sensor body, RG2), its design data (the gripper's fingers move
     symmetrically, so the centre does not depend on the opening)."""
@@ -252,8 +277,8 @@ def tool_inertial(cell: Cell) -> tuple[float, np.ndarray]:
     body = int(m.site_bodyid[ids.ft_site])
     mass = float(m.body_subtreemass[body])
     com_world = d.subtree_com[body]
-    R = d.site_xmat[ids.ft_site].reshape(3, 3)
-    return mass, R.T @ (com_world - d.site_xpos[ids.ft_site])
+    R = vm.mat3(d.site_xmat[ids.ft_site])
+    return mass, vm.mtv(R, vm.sub(com_world.tolist(), d.site_xpos[ids.ft_site].tolist()))
 
 
 def _block(array: np.ndarray, index: np.ndarray) -> np.ndarray:

@@ -13,10 +13,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from vgs import vecmath as vm
 from vgs.config import ControllerConfig
 from vgs.control.arm import ArmController
 from vgs.control.gripper import Gripper
-from vgs.control.transforms import exp_so3, log_so3
 from vgs.sim.cell import Cell
 from vgs.sim.ft_sensor import FTSensor
 
@@ -100,22 +100,30 @@ class Robot:
                 return True
         return False
 
-    def move_to(self, p: np.ndarray, R: np.ndarray, speed: float, angular_speed: float = 1.0,
-                until: Callable[[], bool] | None = None, settle: float = 0.2) -> bool:
-        """Move the reference on a straight line (and a geodesic in rotation) to ``(p, R)``.
+    def move_to(self, p: np.ndarray | vm.Vec3, R: np.ndarray | vm.Mat3, speed: float,
+                angular_speed: float = 1.0, until: Callable[[], bool] | None = None,
+                settle: float = 0.2) -> bool:
+        """Move the reference on a straight line (and a geodesic in rotation) to ``(p, R)``:
+        ``p(s) = p0 + s (p - p0)``, ``R(s) = exp(s [w]_x) R0`` with ``w = log(R R0^T)`` and the
+        smoothstep ``s = 3 u^2 - 2 u^3`` of the time fraction ``u`` (plain floats).
 
         Returns True when ``until()`` fired, False when the motion finished without it.
         """
-        p0, R0 = self.arm.p_ref.copy(), self.arm.R_ref.copy()
-        dp = np.asarray(p, dtype=float) - p0
-        w = log_so3(np.asarray(R) @ R0.T)
-        duration = max(np.linalg.norm(dp) / speed, np.linalg.norm(w) / angular_speed, self.dt)
+        p0, R0 = self.arm.reference_t
+        p1 = p if isinstance(p, tuple) else vm.vec3(p)
+        R1 = R if isinstance(R, tuple) else vm.mat3(R)
+        dx, dy, dz = vm.sub(p1, p0)
+        w0, w1, w2 = vm.log_so3(vm.mmt(R1, R0))
+        duration = max(vm.norm((dx, dy, dz)) / speed, vm.norm((w0, w1, w2)) / angular_speed,
+                       self.dt)
         n = int(math.ceil(duration / self.dt))
-        w0, w1, w2 = w.tolist()
+        x0, y0, z0 = p0
+        set_reference, exp_so3, mm = self.arm.set_reference, vm.exp_so3, vm.mm
         for k in range(1, n + 1):
             s = k / n
             s = s * s * (3 - 2 * s)  # smoothstep: zero speed at both ends
-            self.arm.set_reference(p0 + s * dp, exp_so3((s * w0, s * w1, s * w2)) @ R0)
+            set_reference((x0 + s * dx, y0 + s * dy, z0 + s * dz),
+                          mm(exp_so3((s * w0, s * w1, s * w2)), R0))
             self.tick()
             if until is not None and until():
                 return True

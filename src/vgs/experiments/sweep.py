@@ -60,6 +60,7 @@ COLUMNS: tuple[str, ...] = (
     "offset_mm", "peg_mass_kg", "peg_length_mm", "assembly_success", "assembly_time_s",
     *(f"time_{p}_s" for p in PHASES),
     "adjustments", "retries", "failure_reason", "seed", "trial", "grasp_offset_mm",
+    "grasp_offset_com_mm", "across_mm", "peg_com_shift_mm",
     "jaw_misalignment_deg", "peg_turn_deg", "peak_grasp_moment_nm", "peak_moment_measured_nm",
     "host_cpu",
     "mujoco_version",

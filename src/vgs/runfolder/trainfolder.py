@@ -26,15 +26,18 @@ from vgs.runfolder.common import check_request, host, provenance, read_json, sou
 # Column vocabulary of vgs.columns; booleans are written True/False (0/1 before 2026-12).
 CSV_COLUMNS = (
     "episode", "mode", "seed", "epsilon", "explored", "rotation", "row", "col", "q_value",
-    "grasp_success", "grasp_offset_mm", "jaw_misalignment_deg", "assembly_success",
-    "assembly_time_s", "adjustments", "failure_reason", "r_grasp", "r_assembly", "reward",
+    "grasp_success", "grasp_offset_mm", "grasp_offset_com_mm", "across_mm",
+    "jaw_misalignment_deg",
+    "assembly_success", "assembly_time_s", "adjustments", "failure_reason", "r_grasp",
+    "r_assembly", "reward",
     "threshold_s", "loss", "delta_q",
     "wall_s",
 )
 
 
 # from EpisodeRecord.to_row()
-RECORD_COLUMNS = ("grasp_success", "grasp_offset_mm", "jaw_misalignment_deg",
+RECORD_COLUMNS = ("grasp_success", "grasp_offset_mm", "grasp_offset_com_mm", "across_mm",
+                  "jaw_misalignment_deg",
                   "assembly_success", "assembly_time_s", "adjustments", "failure_reason")
 
 

@@ -14,6 +14,7 @@ pixel size ``s``: rows run along +y, columns along +x.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import mujoco
@@ -22,7 +23,8 @@ import numpy as np
 from vgs.config import CameraConfig
 
 OVERSAMPLE = 2
-_LIGHT = np.array([0.3, -0.2, 1.0]) / np.linalg.norm([0.3, -0.2, 1.0])
+_LIGHT_NORM = math.sqrt(0.3 * 0.3 + 0.2 * 0.2 + 1.0 * 1.0)
+_LIGHT = (0.3 / _LIGHT_NORM, -0.2 / _LIGHT_NORM, 1.0 / _LIGHT_NORM)  # unit light direction
 
 
 @dataclass(frozen=True)
@@ -95,7 +97,10 @@ class RayCastCamera:
         row = np.floor((pts[:, 1] - y0) / cfg.pixel_size).astype(int)
         ok = np.flatnonzero((row >= 0) & (row < cfg.size) & (col >= 0) & (col < cfg.size))
         rays = hit[ok]
-        shade = 0.55 + 0.45 * np.clip(self._normal3[rays] @ _LIGHT, 0.0, 1.0)
+        # Lambert shading n . l, element-wise (no BLAS product: the same bits on every CPU).
+        n = self._normal3[rays]
+        lit = n[:, 0] * _LIGHT[0] + n[:, 1] * _LIGHT[1] + n[:, 2] * _LIGHT[2]
+        shade = 0.55 + 0.45 * np.clip(lit, 0.0, 1.0)
         rgb = self.model.geom_rgba[self.geomid[rays], :3] * shade[:, None]
         z = np.maximum(pts[ok, 2], 0.0)
         flat = row[ok] * cfg.size + col[ok]

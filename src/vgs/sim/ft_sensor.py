@@ -35,40 +35,44 @@ class FTSensor:
         wc = 2 * math.pi * cfg.cutoff_hz
         self.alpha = 1.0 if cfg.cutoff_hz <= 0 else 1.0 - math.exp(-wc * dt)
         self.sigma = np.array([cfg.force_noise] * 3 + [cfg.torque_noise] * 3)
-        self.filtered: np.ndarray | None = None
-        self.tare_offset = np.zeros(6)
-        self._noise = np.zeros(6)  # work arrays, reused every sample
-        self._out = np.zeros(6)
+        self.filtered: list[float] | None = None
+        self.tare_offset = [0.0] * 6
         # Standard normal draws in blocks (one generator call per NOISE_BLOCK samples; the
-        # sequence is the same as drawing six values per sample), scaled by sigma per block.
+        # sequence is the same as drawing six values per sample), scaled by sigma per block
+        # (numpy's element-wise product rounds once per element, on every CPU).
         self._block = np.zeros((NOISE_BLOCK, 6))
+        self._rows: list[list[float]] = []
         self._next = NOISE_BLOCK
 
-    def sample(self, raw: np.ndarray) -> np.ndarray:
+    def sample(self, raw: np.ndarray) -> tuple[float, float, float, float, float, float]:
         """Feed one raw reading ``(fx, fy, fz, tx, ty, tz)`` and return the tared external wrench
-        in the sensor frame (an array the next call overwrites: copy it to keep it)."""
+        in the sensor frame: ``y = y + alpha ((raw + noise) - y)``, ``w = tare - y`` (plain
+        floats)."""
         if self._next == NOISE_BLOCK:
             self.rng.standard_normal(out=self._block)
             self._block *= self.sigma
+            self._rows = self._block.tolist()
             self._next = 0
-        noisy = self._noise
-        np.add(self._block[self._next], raw, out=noisy)
+        noise = self._rows[self._next]
         self._next += 1
-        if self.filtered is None:
-            self.filtered = noisy.copy()
+        r = raw.tolist()
+        noisy = [noise[0] + r[0], noise[1] + r[1], noise[2] + r[2], noise[3] + r[3],
+                 noise[4] + r[4], noise[5] + r[5]]
+        y = self.filtered
+        if y is None:
+            y = self.filtered = noisy
         else:
-            noisy -= self.filtered
-            noisy *= self.alpha
-            self.filtered += noisy
-        out = self._out
-        np.subtract(self.tare_offset, self.filtered, out=out)
-        return out
+            a = self.alpha
+            for i in range(6):
+                y[i] += (noisy[i] - y[i]) * a
+        t = self.tare_offset
+        return (t[0] - y[0], t[1] - y[1], t[2] - y[2], t[3] - y[3], t[4] - y[4], t[5] - y[5])
 
     def tare(self) -> None:
         """Zero the sensor at the current (filtered) reading."""
         if self.filtered is not None:
-            self.tare_offset = self.filtered.copy()
+            self.tare_offset = list(self.filtered)
 
     def raw_filtered(self) -> np.ndarray:
         """The filtered reading before taring (the wrench the flange exerts on the tool)."""
-        return np.zeros(6) if self.filtered is None else self.filtered.copy()
+        return np.zeros(6) if self.filtered is None else np.array(self.filtered)

@@ -31,6 +31,10 @@ def add_table(world: mujoco.MjsBody) -> None:
     )
 
 
+MARK_LENGTH = 0.010  # the painted heavy end [m]
+MARK_THICKNESS = 0.0003  # its coat, so the camera's rays meet it first [m]
+
+
 def add_peg(world: mujoco.MjsBody, cfg: PegConfig, solref: list[float],
             solimp: list[float]) -> None:
     """A free cylinder; its axis is the body's z axis, its centre of mass the body origin.
@@ -49,9 +53,47 @@ def add_peg(world: mujoco.MjsBody, cfg: PegConfig, solref: list[float],
         conaffinity=CT_SCENE | CT_GRIPPER, condim=4,
         friction=[cfg.friction, 0.002, 0.0005], solref=solref, solimp=solimp, group=0,
     )
+    if cfg.com_shift_mm:
+        _shift_centre_of_mass(peg, cfg)
     peg.add_site(name="peg_com", pos=[0, 0, 0], size=[0.003, 0, 0], group=3)
     peg.add_site(name="peg_end_pos", pos=[0, 0, cfg.length / 2], size=[0.003, 0, 0], group=3)
     peg.add_site(name="peg_end_neg", pos=[0, 0, -cfg.length / 2], size=[0.003, 0, 0], group=3)
+
+
+def peg_inertial(cfg: PegConfig) -> tuple[float, float, float, float]:
+    """``(mass, c, I_transverse, I_axial)`` of a peg whose centre of mass lies ``c`` from its
+    middle along its axis (body +z, the heavy end), about that centre.
+
+    A body of the peg's material fills the whole cylinder (mass ``m_b``, centre at 0) and an
+    insert adds ``m_i`` uniformly over the last quarter ``l_i = L / 4`` (centre at
+    ``z_i = 3 L / 8``): ``m_i z_i = m c``, ``m_b = m - m_i``. With ``r`` the radius,
+    ``I_axial = m r^2 / 2`` and ``I_transverse = m_b ((3 r^2 + L^2) / 12 + c^2)
+    + m_i ((3 r^2 + l_i^2) / 12 + (z_i - c)^2)`` (solid cylinders, parallel axes).
+    """
+    m, L, r = cfg.mass, cfg.length, cfg.radius
+    c = cfg.com_shift_mm / 1000.0
+    l_i, z_i = L / 4.0, 3.0 * L / 8.0
+    m_i = m * c / z_i
+    m_b = m - m_i
+    transverse = (m_b * ((3.0 * r * r + L * L) / 12.0 + c * c)
+                  + m_i * ((3.0 * r * r + l_i * l_i) / 12.0 + (z_i - c) ** 2))
+    return m, c, transverse, 0.5 * m * r * r
+
+
+def _shift_centre_of_mass(peg: mujoco.MjsBody, cfg: PegConfig) -> None:
+    """Give the peg body the inertia of :func:`peg_inertial` (explicit: the geom's uniform
+    mass no longer counts) and, with ``com_marking = visible``, paint its heavy end."""
+    mass, c, transverse, axial = peg_inertial(cfg)
+    peg.explicitinertial = True
+    peg.mass = mass
+    peg.ipos = [0.0, 0.0, c]
+    peg.iquat = [1.0, 0.0, 0.0, 0.0]
+    peg.inertia = [transverse, transverse, axial]
+    if cfg.com_marking == "visible":
+        peg.add_geom(name="peg_mark", type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+                     size=[cfg.radius + MARK_THICKNESS, MARK_LENGTH / 2, 0],
+                     pos=[0.0, 0.0, cfg.length / 2 - MARK_LENGTH / 2], mass=0.0,
+                     rgba=[0.1, 0.25, 0.85, 1], contype=0, conaffinity=0, group=0)
 
 
 def wedge_vertices(cfg: HoleConfig, k: int) -> np.ndarray:

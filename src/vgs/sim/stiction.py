@@ -47,6 +47,7 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
+from vgs import vecmath as vm
 from vgs.config import GripperConfig
 from vgs.sim.rg2 import grasp_moment_capacity
 
@@ -90,6 +91,10 @@ class PadStiction:
         self.housing = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "rg2")
         self.peg, self.tcp, self.peg_geom = ids.peg_body, ids.tcp_site, ids.peg_geom
         self.pads = ids.pad_geoms
+        # (geom1, geom2) of a contact between the peg and a pad -> 0 (left pad) or 1 (right).
+        left, right = (int(g) for g in ids.pad_geoms)
+        peg = int(ids.peg_geom)
+        self._pad_of = {(peg, left): 0, (left, peg): 0, (peg, right): 1, (right, peg): 1}
         self.peg_dofs = slice(ids.peg_dof, ids.peg_dof + 6)
         self.peg_radius = peg_radius
         self.capacity_per_newton = grasp_moment_capacity(cfg) / (2.0 * cfg.force)
@@ -102,14 +107,10 @@ class PadStiction:
         dof = ids.peg_dof
         self._f_peg = self._qfrc[dof:dof + 3]  # J^T f on the peg's free joint: world force
         self._tau_peg_local = self._qfrc[dof + 3:dof + 6]  # and torque, peg frame
-        self._R_world_peg = data.xmat[self.peg].reshape(3, 3)
+        self._R_world_peg = data.xmat[self.peg]  # flat, row-major
         self._p_world_peg = data.xpos[self.peg]
-        self._R_tcp_world = data.site_xmat[self.tcp].reshape(3, 3).T
+        self._R_world_tcp = data.site_xmat[self.tcp]
         self._p_world_tcp = data.site_xpos[self.tcp]
-        self._tau = np.zeros(3)
-        self._mom = np.zeros(3)
-        self._f_tool = np.zeros(3)
-        self._mom_tool = np.zeros(3)
         # Ground truth for records and tests: how often the pads broke loose, the last load.
         self.breaks = 0
         self.last_load = 0.0
@@ -151,13 +152,13 @@ class PadStiction:
         position and ``relquat`` its orientation in the housing's frame.
         """
         m, d = self.model, self.data
-        p1, R1 = d.xpos[self.housing], d.xmat[self.housing].reshape(3, 3)
-        p2, R2 = d.xpos[self.peg], d.xmat[self.peg].reshape(3, 3)
+        p1, R1 = d.xpos[self.housing].tolist(), tuple(d.xmat[self.housing].tolist())
+        p2, R2 = d.xpos[self.peg].tolist(), tuple(d.xmat[self.peg].tolist())
         eq = m.eq_data[self.eq]
         eq[0:3] = 0.0
-        eq[3:6] = R1.T @ (p2 - p1)
+        eq[3:6] = vm.mtv(R1, vm.sub(p2, p1))
         q = np.zeros(4)
-        mujoco.mju_mat2Quat(q, (R1.T @ R2).ravel())
+        mujoco.mju_mat2Quat(q, np.array(vm.mtm(R1, R2)))
         eq[6:10] = q
         eq[10] = 1.0  # torquescale
         d.eq_active[self.eq] = 1
@@ -168,13 +169,14 @@ class PadStiction:
         mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, self.peg, self._vel, 0)
         mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, self.housing,
                                  self._vel_housing, 0)
-        hsg = self._vel_housing
-        w_rel = self._vel[:3] - hsg[:3]
-        p_tcp = d.site_xpos[self.tcp]
-        v_peg = self._vel[3:] + np.cross(self._vel[:3], p_tcp - d.xpos[self.peg])
-        v_hsg = hsg[3:] + np.cross(hsg[:3], p_tcp - d.xpos[self.housing])
-        return (float(np.linalg.norm(v_peg - v_hsg)) < STICK_SPEED
-                and float(np.linalg.norm(w_rel)) < STICK_RATE)
+        vel, hsg = self._vel.tolist(), self._vel_housing.tolist()
+        w_peg, w_hsg = vel[:3], hsg[:3]
+        p_tcp = d.site_xpos[self.tcp].tolist()
+        # v = v_origin + w x (p_tcp - p_origin): each body's velocity at the TCP.
+        v_peg = vm.add(vel[3:], vm.cross(w_peg, vm.sub(p_tcp, d.xpos[self.peg].tolist())))
+        v_hsg = vm.add(hsg[3:], vm.cross(w_hsg, vm.sub(p_tcp, d.xpos[self.housing].tolist())))
+        return (vm.norm(vm.sub(v_peg, v_hsg)) < STICK_SPEED
+                and vm.norm(vm.sub(w_peg, w_hsg)) < STICK_RATE)
 
     def weld_wrench(self) -> tuple[np.ndarray, np.ndarray]:
         """The wrench the weld alone exerts on the peg while the pads stick (zero otherwise): the
@@ -206,23 +208,23 @@ class PadStiction:
         efc_force = d.efc_force.tolist()
         weights = [0.0] * len(efc_force)
         n_left = n_right = 0.0
-        if d.ncon:
+        ncon = d.ncon
+        if ncon:
             # Plain Python over the few contacts: per tick, numpy's per-call overhead on arrays
-            # this small cost more than the loop (this method runs once per control tick).
+            # this small costs more than the loop (this method runs once per control tick).
             con = d.contact
-            peg, (pad_left, pad_right) = self.peg_geom, self.pads
-            for (g0, g1), a, n in zip(con.geom.tolist(), con.efc_address.tolist(),
-                                      con.dim.tolist(), strict=True):
-                if g0 == peg:
-                    other = g1
-                elif g1 == peg:
-                    other = g0
-                else:
+            geoms = con.geom.ravel().tolist()
+            addresses = con.efc_address.tolist()
+            dims = con.dim.tolist()
+            pad_of = self._pad_of
+            for i in range(ncon):
+                side = pad_of.get((geoms[2 * i], geoms[2 * i + 1]))
+                a = addresses[i]
+                if side is None or a < 0:
                     continue
-                if a < 0 or (other != pad_left and other != pad_right):
-                    continue
+                n = dims[i]
                 weights[a:a + n] = efc_force[a:a + n]
-                if other == pad_left:
+                if side == 0:
                     n_left += efc_force[a]
                 else:
                     n_right += efc_force[a]
@@ -235,20 +237,17 @@ class PadStiction:
         weighted: their constraint forces mapped onto the peg's free joint (``J^T f``), the
         world-frame force ``f`` at the peg's origin and the torque ``tau`` in the peg's
         frame; ``m = R_world_peg tau + r x f`` about the TCP, ``r = p_peg - p_tcp``; both
-        turned into the tool frame by ``R_world_tcp^T``. The cross product on Python floats,
-        the matrix products in numpy (its products round differently from a sum written out)."""
+        turned into the tool frame by ``R_world_tcp^T`` (plain floats, :mod:`vgs.vecmath`)."""
         mujoco.mj_mulJacTVec(self.model, self.data, self._qfrc, self._weights)
-        tau = np.matmul(self._R_world_peg, self._tau_peg_local, out=self._tau).tolist()
-        f0, f1, f2 = self._f_peg.tolist()
+        f = tuple(self._f_peg.tolist())
+        t0, t1, t2 = vm.mv(tuple(self._R_world_peg.tolist()), self._tau_peg_local.tolist())
+        f0, f1, f2 = f
         p0, p1, p2 = self._p_world_peg.tolist()
-        t0, t1, t2 = self._p_world_tcp.tolist()
-        r0, r1, r2 = p0 - t0, p1 - t1, p2 - t2
-        mom = self._mom
-        mom[:] = (tau[0] + (r1 * f2 - r2 * f1), tau[1] + (r2 * f0 - r0 * f2),
-                  tau[2] + (r0 * f1 - r1 * f0))
-        R_tcp_world = self._R_tcp_world
-        return (np.matmul(R_tcp_world, self._f_peg, out=self._f_tool).tolist(),
-                np.matmul(R_tcp_world, mom, out=self._mom_tool).tolist())
+        c0, c1, c2 = self._p_world_tcp.tolist()
+        r0, r1, r2 = p0 - c0, p1 - c1, p2 - c2
+        mom = (t0 + (r1 * f2 - r2 * f1), t1 + (r2 * f0 - r0 * f2), t2 + (r0 * f1 - r1 * f0))
+        R_world_tcp = tuple(self._R_world_tcp.tolist())
+        return list(vm.mtv(R_world_tcp, f)), list(vm.mtv(R_world_tcp, mom))
 
     def _limit_value(self, f: list[float], mom: list[float], normal: float) -> float:
         """The tool-frame wrench's place on the pads' ellipsoidal limit surface: 1 on it."""

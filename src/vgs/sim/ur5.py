@@ -32,6 +32,8 @@ import math
 import mujoco
 import numpy as np
 
+from vgs import vecmath as vm
+
 JOINT_NAMES: tuple[str, ...] = (
     "shoulder_pan_joint",
     "shoulder_lift_joint",
@@ -161,8 +163,8 @@ def add_ur5(parent: mujoco.MjsBody, base_pos: tuple[float, float, float] = (0.0,
         child.add_joint(
             name=JOINT_NAMES[i],
             type=mujoco.mjtJoint.mjJNT_HINGE,
-            pos=(-R.T @ t).tolist(),
-            axis=(R.T @ np.array([0.0, 0.0, 1.0])).tolist(),
+            pos=list(vm.scale(-1.0, vm.mtv(vm.mat3(R), t.tolist()))),
+            axis=list(vm.mtv(vm.mat3(R), (0.0, 0.0, 1.0))),
             range=JOINT_RANGE[i].tolist(),
             armature=float(ARMATURE[i]),
             damping=float(JOINT_DAMPING[i]),
@@ -191,8 +193,8 @@ def _add_link_visual(body: mujoco.MjsBody, i: int) -> None:
     # or a short capsule at the origin when both coincide.
     S = _static_part(i)
     R, t = S[:3, :3], S[:3, 3]
-    p_prev = -R.T @ t
-    if np.linalg.norm(p_prev) > 1e-6:
+    p_prev = vm.scale(-1.0, vm.mtv(vm.mat3(R), t.tolist()))
+    if vm.norm(p_prev) > 1e-6:
         body.add_geom(type=cap, size=[0.045, 0, 0], fromto=[*p_prev, 0, 0, 0], **kw)
     else:
         body.add_geom(type=cap, size=[0.045, 0.03, 0], pos=[0, 0, 0], **kw)

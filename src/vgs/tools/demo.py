@@ -144,7 +144,10 @@ def format_report(record: EpisodeRecord) -> str:
         f"success         {outcome}",
         f"assembly time   {record.assembly_time:.2f} s (simulated)",
         f"adjustments     {record.adjustments}",
-        f"grasp offset    {record.grasp_offset * 1000:+.1f} mm from the centre of mass",
+        f"grasp offset    {record.grasp_offset * 1000:+.1f} mm from the middle, "
+        f"{record.grasp_offset_com * 1000:+.1f} mm from the centre of mass "
+        f"({record.peg_com_shift_mm:g} mm from the middle), {record.across_mm:.1f} mm beside "
+        "the axis",
         f"hole offset     {record.hole_offset_mm:.1f} mm from nominal",
         f"final tilt      {record.final_tilt_deg:.2f} deg",
         f"insertion depth {record.insertion_depth_mm:.1f} mm",
