@@ -127,6 +127,7 @@ def test_the_table_names_every_command() -> None:
 def test_each_command_takes_only_the_flags_it_uses(command: str) -> None:
     assert _takes(command, "--peg-mass", "0.6") == (command in CONFIGURED)
     assert _takes(command, "--profile", "smoke") == (command in CONFIGURED | {"model-info"})
+    assert _takes(command, "--config", "c.json") == (command in CONFIGURED | {"model-info"})
     assert _takes(command, "--set", "network.backbone=light") == (
         command in CONFIGURED | {"model-info"})
     assert _takes(command, "--no-progress") == (command in PROGRESS_BARS)

@@ -42,13 +42,20 @@ from vgs.errors import InterruptedBySignal, VGSError
 
 
 def _config_flags(p: argparse.ArgumentParser, sections: tuple[str, ...] = ()) -> None:
-    """Give a command that builds its configuration from a profile ``--profile`` and ``--set``;
+    """Give a command that builds its configuration from a profile ``--profile`` (or a file,
+    ``--config``) and ``--set``;
     with ``sections`` (the command reads only those) ``--set`` takes only their keys, without
     them the command also takes the cell's override flags (``--peg-mass`` ...)."""
-    p.add_argument("--profile", default="paper",
+    p.add_argument("--profile",
                    help="configuration profile: smoke, quick, medium, paper or paper-light "
                         "(the paper's protocol sized for a 2-core CPU; docs/training.md) "
                         "(default: paper; the cell is the same in all profiles)")
+    p.add_argument("--config", metavar="FILE",
+                   help="the whole configuration from FILE instead of a profile: JSON as vgs "
+                        "config --json prints it, a TOML or JSON table of sections, or a run "
+                        "folder's metadata (run.json, meta.json, sweep.json, reproduce.json; "
+                        "or the folder itself); not with --profile; --set and the flags "
+                        "below still apply on top")
     group = p.add_argument_group("configuration overrides (SI units; vgs config lists every key)")
     if not sections:
         group.add_argument("--peg-mass", type=float, help="peg mass [kg] (cell.peg.mass)")

@@ -9,6 +9,7 @@ from pathlib import Path
 
 from vgs.cli.options import (
     check_video_name,
+    config_label,
     flag_overrides,
     headless_gl_default,
     parse_offsets_mm,
@@ -214,7 +215,7 @@ def cmd_config(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
         print(dumps([{"key": s.key, "value": s.value, "doc": s.doc} for s in items],
                     indent=2))
         return 0
-    print(f"# profile {args.profile}, resolved; each key takes --set KEY=VALUE (a Python "
+    print(f"# {config_label(args)}, resolved; each key takes --set KEY=VALUE (a Python "
           "literal or text)")
     print(format_settings(items))
     return 0
