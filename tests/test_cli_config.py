@@ -84,7 +84,9 @@ def test_version(capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit) as info:
         main(["--version"])
     assert info.value.code == 0
-    assert capsys.readouterr().out.strip() == f"vgs {__version__}"
+    from vgs.revision import source_revision
+
+    assert capsys.readouterr().out.strip() == f"vgs {__version__} (source {source_revision()})"
 
 
 # -- each command takes only the flags it uses ----------------------------------------------

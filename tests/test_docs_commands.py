@@ -97,8 +97,10 @@ def check(command: str, is_span: bool) -> None:
     """Raise :class:`UsageError` (or a ConfigError) if ``command`` cannot work as written."""
     for variant in _variants(command):
         argv = _argv(variant)
-        if argv == ["--help"] or "--help" in argv[1:]:
-            _subparser(argv[:1] if argv[0] != "--help" else ["demo"])
+        if argv in (["--help"], ["--version"]):  # the top-level options
+            continue
+        if "--help" in argv[1:]:
+            _subparser(argv[:1])
             continue
         parser = _subparser(argv)
         options = {s for a in parser._actions for s in a.option_strings}
@@ -145,6 +147,7 @@ def test_every_docs_command_parses(page: str, command: str, is_span: bool) -> No
         "`vgs train --mode vgs --no-such-flag`",  # a reference naming a missing flag
         "`vgs evaluate --policy center --condition nominal\\|heavy --out DIR`",
         "`vgs no-such-command`",
+        "`vgs --versions`",
         "```\nvgs reproduce --profile quick --out DIR --set train.no_such_key=1\n```",
         "```\nvgs export-scene \\\n  --peg-mass 0.6 --oops\n```",
         "```\nvgs reproduce --profile tiny --out DIR\n```",

@@ -80,9 +80,9 @@ def build_parser() -> argparse.ArgumentParser:
     """The ``vgs`` argument parser with its subcommands."""
     parser = CommandParser(prog="vgs", description="Visual grasping strategy for peg-in-hole "
                                              "assembly (UR5 + RG2 in MuJoCo).")
-    from vgs import __version__
-
-    parser.add_argument("--version", action="version", version=f"vgs {__version__}")
+    parser.add_argument("--version", action=_Version, nargs=0,
+                        help="print vgs's version and the source revision it runs from "
+                             "(a checkout's commit or the one its wheel was built from)")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     _add_demo(sub)
     _add_sweep(sub)
@@ -100,6 +100,18 @@ def build_parser() -> argparse.ArgumentParser:
     _add_status(sub)
     _add_config(sub)
     return parser
+
+
+class _Version(argparse.Action):
+    """``--version``: ``vgs 0.1.0 (source <commit>)``, the revision found only when asked."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+                 values: Any, option_string: str | None = None) -> None:
+        from vgs import __version__
+        from vgs.revision import source_revision
+
+        print(f"vgs {__version__} (source {source_revision()})")
+        parser.exit()
 
 
 def _add_demo(sub: Any) -> None:
