@@ -102,8 +102,8 @@ REQUIRED = {
 # Commands that build their configuration from a profile and the cell's override flags.
 CONFIGURED = {"demo", "sweep", "export-scene", "train", "evaluate", "reproduce", "config"}
 # Commands that draw a progress bar (tqdm: vgs.experiments.sweep, .train, .evaluate,
-# vgs.analysis.graspsites).
-PROGRESS_BARS = {"sweep", "train", "evaluate", "reproduce", "grasp-sites"}
+# vgs.analysis.graspsites) or progress lines (demo: vgs.tools.demo.EpisodeTicker).
+PROGRESS_BARS = {"sweep", "train", "evaluate", "reproduce", "grasp-sites", "demo"}
 
 
 def _takes(command: str, *flags: str) -> bool:

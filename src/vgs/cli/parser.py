@@ -123,6 +123,11 @@ def _add_demo(sub: Any) -> None:
                       help="print only the episode record as JSON on stdout")
     demo.add_argument("--out", default="runs/demo",
                       help="folder of demo.png (default: %(default)s)")
+    demo.add_argument("--force", action="store_true",
+                      help="overwrite an existing OUT/demo.png or --video file (without it "
+                           "the demo refuses, before running the episode)")
+    demo.add_argument("--no-progress", action="store_true",
+                      help="no progress lines on stderr during the episode")
     demo.add_argument("--offset", type=float, default=0.0, metavar="MM",
                       help="grasp offset from the visible peg centre along its axis [mm] "
                            "(default: 0, the centre heuristic)")
@@ -322,6 +327,9 @@ def _add_grasp_sites(sub: Any) -> None:
                        help="only this condition's tests (repeatable; default all)")
     sites.add_argument("--csv", metavar="FILE", help="also write one row per test episode "
                                                      "(along_mm, across_mm) to FILE")
+    sites.add_argument("--workers", type=int, metavar="N",
+                       help="processes that reset the test scenes (default: the number of CPU "
+                            "cores); the table is the same for any number")
     sites.add_argument("--no-progress", action="store_true", help="no progress bar")
     sites.set_defaults(func=cmd_grasp_sites)
 

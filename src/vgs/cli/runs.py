@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
+import time
 from pathlib import Path
 
 from vgs.cli.options import (
@@ -34,9 +36,21 @@ def cmd_demo(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     from vgs.tools.demo import format_report, run_demo
     from vgs.tools.demofigure import demo_figure
 
-    seed = cfg.seed if args.seed is None else args.seed
-    result = run_demo(cfg, seed, args.offset / 1000.0, policy=args.policy)
     out = Path(args.out)
+    targets = [out / "demo.png", *([Path(args.video)] if args.video else [])]
+    existing = [str(path) for path in targets if path.exists() or path.is_symlink()]
+    if existing and not args.force:  # before the episode, not after it
+        raise ConfigError("demo", f"{', '.join(existing)} exists; add --force to overwrite, or "
+                                  "give another --out/--video")
+    seed = cfg.seed if args.seed is None else args.seed
+    progress = None if args.no_progress else _demo_progress
+    if progress is not None:
+        print(f"demo: seed {seed}, running the episode ...", file=sys.stderr, flush=True)
+    started = time.monotonic()
+    result = run_demo(cfg, seed, args.offset / 1000.0, policy=args.policy, progress=progress)
+    if progress is not None:
+        print(f"demo: episode done, {result.trace.time[-1]:.1f} s simulated in "
+              f"{time.monotonic() - started:.0f} s wall", file=sys.stderr, flush=True)
     out.mkdir(parents=True, exist_ok=True)
     figure = demo_figure(result, out / "demo.png")
     video = None
@@ -53,6 +67,11 @@ def cmd_demo(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
         if video is not None:
             print(f"video           {video}")
     return 0
+
+
+def _demo_progress(simulated: float, wall: float) -> None:
+    """One progress line of ``vgs demo`` on stderr."""
+    print(f"demo: {simulated:.1f} s simulated, {wall:.0f} s wall", file=sys.stderr, flush=True)
 
 
 def cmd_sweep(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
