@@ -13,6 +13,7 @@ from __future__ import annotations
 import importlib.util
 import json
 from pathlib import Path
+from types import ModuleType
 
 from setuptools import setup
 from setuptools.command.build_py import build_py
@@ -20,8 +21,10 @@ from setuptools.command.build_py import build_py
 ROOT = Path(__file__).resolve().parent
 
 
-def _revision_module():  # noqa: ANN202 (a module object)
+def _revision_module() -> ModuleType:
+    """``src/vgs/revision.py``, loaded by its path (the package itself is not imported)."""
     spec = importlib.util.spec_from_file_location("_vgs_revision", ROOT / "src/vgs/revision.py")
+    assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module

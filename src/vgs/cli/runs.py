@@ -25,6 +25,12 @@ from vgs.jsonsafe import dumps
 def cmd_demo(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     """One traced episode: phase table (or JSON record), DIR/demo.png and, with ``--video``, the
     episode rendered as a video."""
+    out = Path(args.out)
+    targets = [out / "demo.png", *([Path(args.video)] if args.video else [])]
+    existing = [str(path) for path in targets if path.exists() or path.is_symlink()]
+    if existing and not args.force:  # before the episode, not after it
+        raise ConfigError("demo", f"{', '.join(existing)} exists; add --force to overwrite, or "
+                                  "give another --out/--video")
     video_size = parse_video_size(args.video_size) if args.video else None
     if args.video:
         check_video_name(args.video)
@@ -36,16 +42,8 @@ def cmd_demo(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     from vgs.tools.demo import format_report, run_demo
     from vgs.tools.demofigure import demo_figure
 
-    out = Path(args.out)
-    targets = [out / "demo.png", *([Path(args.video)] if args.video else [])]
-    existing = [str(path) for path in targets if path.exists() or path.is_symlink()]
-    if existing and not args.force:  # before the episode, not after it
-        raise ConfigError("demo", f"{', '.join(existing)} exists; add --force to overwrite, or "
-                                  "give another --out/--video")
     seed = cfg.seed if args.seed is None else args.seed
     progress = None if args.no_progress else _demo_progress
-    if progress is not None:
-        print(f"demo: seed {seed}, running the episode ...", file=sys.stderr, flush=True)
     started = time.monotonic()
     result = run_demo(cfg, seed, args.offset / 1000.0, policy=args.policy, progress=progress)
     if progress is not None:
@@ -70,8 +68,9 @@ def cmd_demo(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
 
 
 def _demo_progress(simulated: float, wall: float) -> None:
-    """One progress line of ``vgs demo`` on stderr."""
-    print(f"demo: {simulated:.1f} s simulated, {wall:.0f} s wall", file=sys.stderr, flush=True)
+    """One progress line of ``vgs demo`` on stderr (every 2 s of wall time)."""
+    print(f"demo: episode at {simulated:.1f} s simulated, {wall:.0f} s wall", file=sys.stderr,
+          flush=True)
 
 
 def cmd_sweep(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
