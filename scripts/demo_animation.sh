@@ -24,8 +24,8 @@ print(f"{sys.argv[1]}: seed {r['seed']}, {done}, {r['adjustments']} adjustments,
 PY
 )
 caption() { .venv/bin/python -c "$CAPTION" "$1"; }  # the episode record (--json) as one line
-$VGS demo --seed 3 --out "$TMP/centre" --video docs/figures/demo.gif "${VIDEO[@]}" --json \
+$VGS demo --seed 3 --out "$TMP/centre" --video docs/figures/demo.gif "${VIDEO[@]}" --force --json \
     | caption "docs/figures/demo.gif (centre heuristic)"
 cp "$TMP/centre/demo.png" docs/figures/demo.png
 $VGS demo --seed 3 --policy "$POLICY" --out "$TMP/policy" --video docs/figures/demo_policy.gif \
-    "${VIDEO[@]}" --json | caption "docs/figures/demo_policy.gif ($POLICY)"
+    "${VIDEO[@]}" --force --json | caption "docs/figures/demo_policy.gif ($POLICY)"

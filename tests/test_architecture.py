@@ -27,8 +27,9 @@ MAY_IMPORT: dict[str, set[str]] = {
     "control": {"errors", "config", "vecmath", "sim"},
     "render": {"errors", "config", "sim"},
     "assembly": {"errors", "columns", "config", "perception", "vecmath", "sim", "control"},
+    "revision": set(),
     "runfolder": {"errors", "jsonsafe", "columns", "config", "validate", "checkpoint",
-                  "grasping"},
+                  "grasping", "revision"},
     "rollout": {"errors", "config", "validate", "checkpoint", "runfolder", "sim", "grasping",
                 "assembly"},
     "analysis": {"errors", "columns", "config", "checkpoint", "runfolder", "grasping", "control",
@@ -40,8 +41,8 @@ MAY_IMPORT: dict[str, set[str]] = {
     "envs": {"errors", "config", "validate", "perception", "sim", "grasping", "render",
              "assembly", "rollout"},
     "cli": {"errors", "jsonsafe", "columns", "configdoc", "config", "perception", "validate",
-            "checkpoint", "runfolder", "sim", "grasping", "control", "render", "assembly",
-            "analysis", "experiments", "tools", "vgs"},
+            "revision", "checkpoint", "runfolder", "sim", "grasping", "control", "render",
+            "assembly", "analysis", "experiments", "tools", "vgs"},
     "vgs": {"envs"},  # the package's face: __version__ and the environment's registration
 }
 

@@ -84,7 +84,9 @@ def test_version(capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit) as info:
         main(["--version"])
     assert info.value.code == 0
-    assert capsys.readouterr().out.strip() == f"vgs {__version__}"
+    from vgs.revision import source_revision
+
+    assert capsys.readouterr().out.strip() == f"vgs {__version__} (source {source_revision()})"
 
 
 # -- each command takes only the flags it uses ----------------------------------------------
@@ -100,8 +102,8 @@ REQUIRED = {
 # Commands that build their configuration from a profile and the cell's override flags.
 CONFIGURED = {"demo", "sweep", "export-scene", "train", "evaluate", "reproduce", "config"}
 # Commands that draw a progress bar (tqdm: vgs.experiments.sweep, .train, .evaluate,
-# vgs.analysis.graspsites).
-PROGRESS_BARS = {"sweep", "train", "evaluate", "reproduce", "grasp-sites"}
+# vgs.analysis.graspsites) or progress lines (demo: vgs.tools.demo.EpisodeTicker).
+PROGRESS_BARS = {"sweep", "train", "evaluate", "reproduce", "grasp-sites", "demo"}
 
 
 def _takes(command: str, *flags: str) -> bool:
@@ -127,6 +129,7 @@ def test_the_table_names_every_command() -> None:
 def test_each_command_takes_only_the_flags_it_uses(command: str) -> None:
     assert _takes(command, "--peg-mass", "0.6") == (command in CONFIGURED)
     assert _takes(command, "--profile", "smoke") == (command in CONFIGURED | {"model-info"})
+    assert _takes(command, "--config", "c.json") == (command in CONFIGURED | {"model-info"})
     assert _takes(command, "--set", "network.backbone=light") == (
         command in CONFIGURED | {"model-info"})
     assert _takes(command, "--no-progress") == (command in PROGRESS_BARS)
@@ -200,3 +203,35 @@ def test_config_prints_what_set_resolves(capsys: pytest.CaptureFixture[str]) -> 
     lines = {line.split(" = ")[0].strip(): line for line in out.splitlines()}
     assert "= 4.0 " in lines["assembly.press_force"]
     assert "= ('nominal', 'mass') " in lines["reproduce.conditions"]
+
+
+# -- vgs demo: progress while the episode runs, no silent overwrite ---------------------------
+
+
+def test_demo_ticker_reports_the_clock_while_it_runs() -> None:
+    import time
+
+    from vgs.tools.demo import EpisodeTicker
+
+    seen: list[tuple[float, float]] = []
+    clock = iter(range(1000))
+    with EpisodeTicker(lambda: float(next(clock)), lambda s, w: seen.append((s, w)),
+                       interval=0.01):
+        time.sleep(0.2)
+    count = len(seen)
+    time.sleep(0.05)
+    assert len(seen) == count >= 3  # reported while inside, stopped on leaving
+    assert [s for s, _ in seen] == sorted(s for s, _ in seen) and seen[-1][1] > 0
+
+
+def test_demo_refuses_to_overwrite_before_the_episode(
+        tmp_path, capsys: pytest.CaptureFixture[str]) -> None:
+    (tmp_path / "demo.png").write_bytes(b"old")
+    assert main(["demo", "--profile", "smoke", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "demo.png exists; add --force" in err
+    video = tmp_path / "v.gif"
+    video.write_bytes(b"old")
+    assert main(["demo", "--out", str(tmp_path / "new"), "--video", str(video)]) == 2
+    assert "v.gif exists" in capsys.readouterr().err
+    assert (tmp_path / "demo.png").read_bytes() == b"old" and not (tmp_path / "new").exists()

@@ -35,6 +35,15 @@ def test_demo_json(tmp_path: Path) -> None:
     assert row["seed"] == 2 and "time_search_s" in row and "grasp_offset_mm" in row
     assert "assembly_time_s" in row and "peg_length_mm" in row
     assert (out / "demo.png").stat().st_size > 10_000
+    # progress on stderr while the episode runs, ending with its simulated time
+    assert re.search(r"demo: episode done, \d+\.\d s simulated in \d+ s wall", proc.stderr)
+    # the figure is there: refused before the episode, overwritten with --force
+    again = vgs("demo", "--seed", "2", "--profile", "smoke", "--out", str(out), cwd=tmp_path)
+    assert again.returncode == 2 and again.stderr.count("\n") == 1
+    assert "demo.png exists; add --force" in again.stderr and again.stdout == ""
+    forced = vgs("demo", "--seed", "2", "--json", "--profile", "smoke", "--out", str(out),
+                 "--force", "--no-progress", cwd=tmp_path)
+    assert forced.returncode == 0 and forced.stderr == "" and forced.stdout == proc.stdout
 
 
 @pytest.mark.slow
@@ -202,6 +211,11 @@ def test_reproduce_quick_at_reduced_size(tmp_path: Path, quick_reproduction: Any
                  for _ in csv.DictReader(table.open()))
     assert len(written) == tested
     assert all(r["across_mm"] for r in written if r["policy"] in ("baseline", "vgs"))
+    one = vgs("grasp-sites", str(out), "--condition", "nominal", "--no-progress", "--csv",
+              str(tmp_path / "sites1.csv"), "--workers", "1", cwd=tmp_path)
+    assert one.returncode == 0, one.stderr
+    assert (tmp_path / "sites1.csv").read_bytes() == sites_csv.read_bytes()
+    assert one.stdout.replace("sites1.csv", "sites.csv") == sites.stdout
     # started again, every stage is already done: nothing is trained or evaluated again
     again = vgs(*args, cwd=tmp_path)
     assert again.returncode == 0, again.stderr

@@ -1,7 +1,8 @@
 """Every result says where it came from (issue 42, item 3): a training run and an evaluation
 made by vgs running from an installed copy (not a checkout) record vgs's version, "installed
 package" as the source, MuJoCo's and torch's versions, in run.json, meta.json and the parquet
-schema; a resume with other recorded versions is not refused."""
+schema; a resume with other recorded versions is not refused. A wheel built from a git checkout
+records the commit it was built from, and ``vgs --version`` names it (issue 54, item 4)."""
 
 from __future__ import annotations
 
@@ -91,3 +92,65 @@ def test_tensorboard_logs_the_configuration(tmp_path: Path) -> None:
     acc.Reload()
     text = acc.Tensors("config/text_summary")[0].tensor_proto.string_val[0].decode()
     assert '"mode": "vgs"' in text and '"vgs_version"' in text and '"learning_rate"' in text
+
+
+def _tree(root: Path) -> Path:
+    """A copy of what a wheel is built from (pyproject.toml, setup.py, README.md, src/)."""
+    source = Path(vgs.__file__).resolve().parents[2]
+    root.mkdir()
+    for name in ("pyproject.toml", "setup.py", "README.md"):
+        shutil.copy(source / name, root / name)
+    shutil.copytree(source / "src", root / "src",
+                    ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
+    return root
+
+
+def _wheel(tree: Path, dist: Path) -> Path:
+    proc = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps",
+                           "--no-build-isolation", "--no-index", "-q", "-w", str(dist), str(tree)],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    [wheel] = dist.glob("vgs-*.whl")
+    return wheel
+
+
+def test_a_wheel_records_the_commit_it_was_built_from(tmp_path: Path) -> None:
+    """From a git checkout: the wheel holds vgs/build_info.json with its commit, and vgs
+    installed from it (outside any checkout) prints it in --version and records it; built outside
+    git, the wheel says "unknown"."""
+    import zipfile
+
+    if shutil.which("git") is None:
+        pytest.skip("no git")
+    tree = _tree(tmp_path / "clone")
+    git = ["git", "-c", "user.name=t", "-c", "user.email=t@t", "-c", "commit.gpgsign=false"]
+    for args in (["init", "-q"], ["add", "-A"], ["commit", "-q", "-m", "build me"]):
+        subprocess.run([*git, *args], cwd=tree, check=True, capture_output=True, timeout=60)
+    head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=tree, capture_output=True,
+                          text=True, check=True).stdout.strip()
+    wheel = _wheel(tree, tmp_path / "dist")
+    with zipfile.ZipFile(wheel) as archive:
+        assert json.loads(archive.read("vgs/build_info.json")) == {"source_revision": head}
+    site = tmp_path / "site"
+    subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--no-index", "-q",
+                    "--target", str(site), str(wheel)], check=True, capture_output=True,
+                   timeout=300)
+    env = {**os.environ, "PYTHONPATH": str(site)}
+    out = tmp_path / "elsewhere"
+    out.mkdir()
+
+    def run(*args: str) -> str:
+        proc = subprocess.run([sys.executable, *args], capture_output=True, text=True,
+                              timeout=300, cwd=out, env=env)
+        assert proc.returncode == 0, proc.stderr
+        return proc.stdout
+
+    assert run("-c", "import vgs; print(vgs.__file__)").strip() == str(
+        site / "vgs" / "__init__.py")
+    assert run("-m", "vgs.cli", "--version").strip() == f"vgs {vgs.__version__} (source {head})"
+    assert run("-c", "from vgs.runfolder.common import provenance; "
+                     "print(provenance()['source_revision'])").strip() == head
+
+    outside = _tree(tmp_path / "unpacked")  # an sdist unpacked: no git
+    with zipfile.ZipFile(_wheel(outside, tmp_path / "dist2")) as archive:
+        assert json.loads(archive.read("vgs/build_info.json")) == {"source_revision": "unknown"}

@@ -35,6 +35,8 @@ def test_a_pixel_at_a_known_point_of_the_peg_comes_back_as_that_point() -> None:
                        "grasp_offset_mm": [20.0, -30.0, 0.0, 0.0],
                        "assembly_success": [True, False, True, True]})
     sites = grasp_sites(df, cfg, progress=False)
+    # two spawned processes, the grasps shuffled between them: the same table
+    pd.testing.assert_frame_equal(grasp_sites(df, cfg, progress=False, workers=2), sites)
     half_diagonal_mm = 1000 * hm.pixel_size / np.sqrt(2)  # a pixel's centre vs the point
     assert np.allclose(sites["along_mm"][:3], [20.0, -30.0, 0.0], atol=half_diagonal_mm)
     assert np.allclose(sites["across_mm"][:3], [8.0, 12.0, 0.0], atol=half_diagonal_mm)

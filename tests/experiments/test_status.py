@@ -111,9 +111,13 @@ def test_reproduction_folder(tmp_path: Path) -> None:
     assert [p.finished for p in sections["evaluate"]] == [False, False, True]
     assert [p.total for p in sections["evaluate"]] == [5, 5, 5]
     text = format_status(out)
-    assert "smoke profile, commit abcdef0" in text and "train 2.00 h" in text
+    assert "smoke profile, source abcdef0123" in text and "train 2.00 h" in text
     assert "train (1/2 done)" in text and "evaluate (1/3 done)" in text
     assert "not started" in text and "report: not written yet" in text
+    meta = json.loads((out / "reproduce.json").read_text())
+    for revision in ("installed package", "unknown"):  # whole, not cut to a hash's length
+        (out / "reproduce.json").write_text(json.dumps({**meta, "git_revision": revision}))
+        assert f"smoke profile, source {revision}\n" in format_status(out)
 
 
 def test_reproduction_with_a_training_run_not_started(tmp_path: Path) -> None:

@@ -20,8 +20,12 @@ heuristic) get NaN.
 
 from __future__ import annotations
 
+import multiprocessing as mp
+from collections.abc import Iterator
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -32,6 +36,7 @@ from vgs.assembly.episode import EpisodeRunner
 from vgs.checkpoint import atomic_write_text
 from vgs.config import ExperimentConfig
 from vgs.errors import ConfigError
+from vgs.rollout.episodepool import single_blas_thread, stop_pool
 from vgs.runfolder.common import read_json
 from vgs.runfolder.status import recorded_config
 
@@ -54,35 +59,71 @@ def folder_config(out: Path) -> ExperimentConfig:
     return recorded_config(path, read_json(path).get("config"))
 
 
-def grasp_sites(df: pd.DataFrame, cfg: ExperimentConfig, progress: bool = True
-                ) -> pd.DataFrame:
+def grasp_sites(df: pd.DataFrame, cfg: ExperimentConfig, progress: bool = True,
+                workers: int = 1) -> pd.DataFrame:
     """``df``'s test episodes with ``along_mm`` and ``across_mm`` (module docstring).
 
     Args:
         df: Evaluation rows (``seed``, ``peg_mass_kg``, ``peg_length_mm``, ``row``, ``col``).
         cfg: The configuration the tests ran with (its cell).
         progress: Show a tqdm bar on stderr.
+        workers: Processes that reset the scenes (spawned, each with its own cell); 1 = this
+            process. Every scene is reset from its seed alone, so the table is the same for
+            any number.
     """
-    runner = EpisodeRunner(cfg)
     along = np.full(len(df), np.nan)
     across = np.full(len(df), np.nan)
     rows = df[["seed", "peg_mass_kg", "peg_length_mm", "row", "col"]].itertuples(index=False)
-    for i, (seed, mass, length_mm, row, col) in enumerate(
-            tqdm(rows, total=len(df), desc="grasp sites", unit="scene", disable=not progress)):
-        if row < 0 or col < 0:
-            continue
-        peg = replace(cfg.cell.peg, mass=float(mass), length=float(length_mm) / 1000)
-        hm = runner.observe(int(seed), peg)
-        cell, _ = runner.cell(peg)
-        p_world_peg, R_world_peg = cell.peg_pose()
-        a = R_world_peg[:2, 2] / np.linalg.norm(R_world_peg[:2, 2])
-        q = np.asarray(hm.pixel_to_world(int(row), int(col)), dtype=float)
-        v = q - p_world_peg[:2]
-        along[i] = 1000 * float(a @ v)
-        across[i] = 1000 * abs(float(a[0] * v[1] - a[1] * v[0]))
+    tasks = [(i, int(seed), float(mass), float(length_mm), int(row), int(col))
+             for i, (seed, mass, length_mm, row, col) in enumerate(rows) if row >= 0 and col >= 0]
+    workers = max(1, min(workers, len(tasks)))
+    pool = None
+    if workers == 1:
+        _init_worker(cfg)
+        results: Iterator[tuple[int, float, float]] = map(_site, tasks)
+    else:
+        single_blas_thread()
+        pool = ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn"),
+                                   initializer=_init_worker, initargs=(cfg,))
+        results = pool.map(_site, tasks, chunksize=max(1, min(32, len(tasks) // (4 * workers))))
+    try:
+        for i, a, c in tqdm(results, total=len(tasks), desc="grasp sites", unit="scene",
+                            disable=not progress):
+            along[i], across[i] = a, c
+    except BaseException:  # Ctrl-C, SIGTERM, an error in a worker: stop the workers now
+        if pool is not None:
+            stop_pool(pool)
+        raise
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
     sites = df.copy()
     sites["along_mm"], sites["across_mm"] = along, across
     return sites[[c for c in COLUMNS if c in sites.columns]]
+
+
+_WORKER: dict[str, Any] = {}  # this process's configuration and episode runner
+
+
+def _init_worker(cfg: ExperimentConfig) -> None:
+    """Give this process (a pool worker, or the command's own) a runner of ``cfg``'s cell."""
+    _WORKER.update(cfg=cfg, runner=EpisodeRunner(cfg))
+
+
+def _site(task: tuple[int, int, float, float, int, int]) -> tuple[int, float, float]:
+    """``(index, along_mm, across_mm)`` of one test grasp ``(index, seed, peg mass [kg], peg
+    length [mm], row, col)``: its scene reset from the seed, no physics step."""
+    i, seed, mass, length_mm, row, col = task
+    cfg: ExperimentConfig = _WORKER["cfg"]
+    runner: EpisodeRunner = _WORKER["runner"]
+    peg = replace(cfg.cell.peg, mass=mass, length=length_mm / 1000)
+    hm = runner.observe(seed, peg)
+    cell, _ = runner.cell(peg)
+    p_world_peg, R_world_peg = cell.peg_pose()
+    a = R_world_peg[:2, 2] / np.linalg.norm(R_world_peg[:2, 2])
+    q = np.asarray(hm.pixel_to_world(row, col), dtype=float)
+    v = q - p_world_peg[:2]
+    return i, 1000 * float(a @ v), 1000 * abs(float(a[0] * v[1] - a[1] * v[0]))
 
 
 def sites_table(sites: pd.DataFrame) -> str:
@@ -133,9 +174,10 @@ def _cell(rows: pd.DataFrame) -> str:
 
 def grasp_sites_report(out: Path, policies: list[str] | None = None,
                        conditions: list[str] | None = None, csv: Path | None = None,
-                       progress: bool = True) -> str:
+                       progress: bool = True, workers: int = 1) -> str:
     """The table of :func:`sites_table` for the tests in reproduce folder ``out`` (optionally
-    some policies and conditions only), the rows written to ``csv`` when given.
+    some policies and conditions only), the rows written to ``csv`` when given; ``workers``
+    processes reset the scenes (:func:`grasp_sites`).
 
     Raises:
         ConfigError: If ``out`` is no reproduce folder, or the selection is empty.
@@ -149,7 +191,7 @@ def grasp_sites_report(out: Path, policies: list[str] | None = None,
     if df.empty:
         raise ConfigError("grasp-sites", f"no test episodes in {out} for policies "
                                          f"{policies or 'all'}, conditions {conditions or 'all'}")
-    sites = grasp_sites(df.reset_index(drop=True), cfg, progress)
+    sites = grasp_sites(df.reset_index(drop=True), cfg, progress, workers)
     if csv is not None:
         csv.parent.mkdir(parents=True, exist_ok=True)
         atomic_write_text(csv, sites.to_csv(index=False, float_format="%.3f"))

@@ -53,7 +53,7 @@ from vgs.checkpoint import atomic_write_text  # noqa: E402
 from vgs.columns import rounded  # noqa: E402
 from vgs.config import CONDITIONS  # noqa: E402
 from vgs.errors import ConfigError  # noqa: E402
-from vgs.runfolder.common import read_json, read_table  # noqa: E402
+from vgs.runfolder.common import read_json, read_table, short_revision  # noqa: E402
 from vgs.runfolder.layout import eval_tables, holds_network, train_folders  # noqa: E402
 
 
@@ -234,9 +234,7 @@ def provenance_text(made: Any) -> str:
     :func:`vgs.runfolder.common.provenance`; ``""`` for folders written before it was recorded."""
     if not isinstance(made, dict):
         return ""
-    source = str(made.get("source_revision", "?"))
-    source = source if source in ("installed package", "unknown") else source[:10] + (
-        "+modified" if source.endswith("+modified") else "")
+    source = short_revision(made.get("source_revision"))
     return (f"vgs {made.get('vgs_version', '?')} (source {source}), MuJoCo "
             f"{made.get('mujoco_version', '?')}, torch {made.get('torch_version', '?')}")
 
@@ -295,7 +293,7 @@ def _provenance_section(doc: Doc, out: Path, df: pd.DataFrame, meta: dict[str, A
         doc.p(tested_text + ".")
     if meta:
         doc.p(f"Profile `{meta.get('profile')}`, command `{meta.get('command')}`, on "
-              f"{meta.get('machine', '?')}; git {str(meta.get('git_revision', '?'))[:10]}; "
+              f"{meta.get('machine', '?')}; source {short_revision(meta.get('git_revision'))}; "
               f"finished {meta.get('finished', '?')}.")
         made = provenance_text(meta.get("provenance"))
         if made:

@@ -5,6 +5,7 @@ configuration is the one it recorded."""
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
 
 from vgs.config import ExperimentConfig
@@ -91,9 +92,12 @@ def cmd_grasp_sites(args: argparse.Namespace, cfg: ExperimentConfig | None) -> i
     """Print where on the peg each test grasp of a reproduction lay, and what assembled."""
     from vgs.analysis.graspsites import grasp_sites_report
 
+    if args.workers is not None and args.workers < 1:
+        raise ConfigError("workers", f"must be >= 1, got {args.workers}")
+    workers = args.workers or os.cpu_count() or 1
     print(grasp_sites_report(Path(args.dir), args.policy, args.condition,
                              Path(args.csv) if args.csv else None,
-                             progress=not args.no_progress), end="")
+                             progress=not args.no_progress, workers=workers), end="")
     if args.csv:
         print(f"wrote {args.csv}")
     return 0

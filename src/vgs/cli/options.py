@@ -10,8 +10,16 @@ from dataclasses import is_dataclass
 from pathlib import Path
 from typing import Any, NoReturn
 
-from vgs.config import NO_SUCH_FIELD, ExperimentConfig, PegConfig, override, profile
+from vgs.config import (
+    NO_SUCH_FIELD,
+    ExperimentConfig,
+    PegConfig,
+    override,
+    profile,
+    read_config_file,
+)
 from vgs.errors import ConfigError, VGSError
+from vgs.runfolder.folderkind import MARKERS
 from vgs.validate import check_config
 
 # Flag -> dotted configuration path. Values are SI (m, kg, N).
@@ -94,12 +102,13 @@ def check_hole_fits(cfg: ExperimentConfig) -> None:
 
 
 def config_from_args(args: argparse.Namespace) -> ExperimentConfig:
-    """The profile with the override flags and ``--set`` pairs applied, checked.
+    """The profile (or the ``--config`` file) with the override flags and ``--set`` pairs
+    applied, checked.
 
     A command that reads only some sections of the configuration (``args.config_sections``,
     e.g. ``model-info``: ``network``) refuses ``--set`` keys outside them.
     """
-    cfg = profile(args.profile)
+    cfg = base_config(args)
     # The hole is made for the nominal peg: --peg-diameter changes the peg, not the hole.
     cfg = apply_override(cfg, "cell.hole.peg_diameter", PegConfig().diameter)
     for flag, path in OVERRIDE_FLAGS.items():
@@ -119,6 +128,36 @@ def config_from_args(args: argparse.Namespace) -> ExperimentConfig:
     cfg = check_config(cfg)  # types (True is not a mass) and seeds
     check_hole_fits(cfg)
     return cfg
+
+
+def base_config(args: argparse.Namespace) -> ExperimentConfig:
+    """The configuration before any flag: ``--config FILE`` (a run folder: its metadata file),
+    else the ``--profile`` (default ``paper``).
+
+    Raises:
+        ConfigError: ``config`` if both are given (each names a whole configuration), or the
+            file's errors (:func:`vgs.config.read_config_file`).
+    """
+    source = getattr(args, "config", None)
+    if source is None:
+        return profile(args.profile or "paper")
+    if args.profile is not None:
+        raise ConfigError("config", "--config and --profile each name a whole configuration; "
+                                    "give one (change single keys with --set)")
+    path = Path(source)
+    if path.is_dir():
+        found = [path / name for name in MARKERS if (path / name).is_file()]
+        if not found:
+            raise ConfigError("config", f"{path}: is a folder without a run's metadata "
+                                        f"({', '.join(MARKERS)}); name a file")
+        path = found[0]
+    return read_config_file(path)
+
+
+def config_label(args: argparse.Namespace) -> str:
+    """Where the configuration came from, for a header: ``profile P`` or ``config FILE``."""
+    source = getattr(args, "config", None)
+    return f"profile {args.profile or 'paper'}" if source is None else f"config {source}"
 
 
 def flag_overrides(cfg: ExperimentConfig, args: argparse.Namespace,

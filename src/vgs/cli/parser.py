@@ -43,13 +43,20 @@ from vgs.errors import InterruptedBySignal, VGSError
 
 
 def _config_flags(p: argparse.ArgumentParser, sections: tuple[str, ...] = ()) -> None:
-    """Give a command that builds its configuration from a profile ``--profile`` and ``--set``;
+    """Give a command that builds its configuration from a profile ``--profile`` (or a file,
+    ``--config``) and ``--set``;
     with ``sections`` (the command reads only those) ``--set`` takes only their keys, without
     them the command also takes the cell's override flags (``--peg-mass`` ...)."""
-    p.add_argument("--profile", default="paper",
+    p.add_argument("--profile",
                    help="configuration profile: smoke, quick, medium, paper or paper-light "
                         "(the paper's protocol sized for a 2-core CPU; docs/training.md) "
                         "(default: paper; the cell is the same in all profiles)")
+    p.add_argument("--config", metavar="FILE",
+                   help="the whole configuration from FILE instead of a profile: JSON as vgs "
+                        "config --json prints it, a TOML or JSON table of sections, or a run "
+                        "folder's metadata (run.json, meta.json, sweep.json, reproduce.json; "
+                        "or the folder itself); not with --profile; --set and the flags "
+                        "below still apply on top")
     group = p.add_argument_group("configuration overrides (SI units; vgs config lists every key)")
     if not sections:
         group.add_argument("--peg-mass", type=float, help="peg mass [kg] (cell.peg.mass)")
@@ -74,9 +81,9 @@ def build_parser() -> argparse.ArgumentParser:
     """The ``vgs`` argument parser with its subcommands."""
     parser = CommandParser(prog="vgs", description="Visual grasping strategy for peg-in-hole "
                                              "assembly (UR5 + RG2 in MuJoCo).")
-    from vgs import __version__
-
-    parser.add_argument("--version", action="version", version=f"vgs {__version__}")
+    parser.add_argument("--version", action=_Version, nargs=0,
+                        help="print vgs's version and the source revision it runs from "
+                             "(a checkout's commit or the one its wheel was built from)")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     _add_demo(sub)
     _add_sweep(sub)
@@ -97,6 +104,18 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class _Version(argparse.Action):
+    """``--version``: ``vgs 0.1.0 (source <commit>)``, the revision found only when asked."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+                 values: Any, option_string: str | None = None) -> None:
+        from vgs import __version__
+        from vgs.revision import source_revision
+
+        print(f"vgs {__version__} (source {source_revision()})")
+        parser.exit()
+
+
 def _add_demo(sub: Any) -> None:
     """``vgs demo``."""
     demo = sub.add_parser("demo", help="one whole episode with a figure")
@@ -106,6 +125,11 @@ def _add_demo(sub: Any) -> None:
                       help="print only the episode record as JSON on stdout")
     demo.add_argument("--out", default="runs/demo",
                       help="folder of demo.png (default: %(default)s)")
+    demo.add_argument("--force", action="store_true",
+                      help="overwrite an existing OUT/demo.png or --video file (without it "
+                           "the demo refuses, before running the episode)")
+    demo.add_argument("--no-progress", action="store_true",
+                      help="no progress lines on stderr during the episode")
     demo.add_argument("--offset", type=float, default=0.0, metavar="MM",
                       help="grasp offset from the visible peg centre along its axis [mm] "
                            "(default: 0, the centre heuristic)")
@@ -308,6 +332,9 @@ def _add_grasp_sites(sub: Any) -> None:
                        help="only this condition's tests (repeatable; default all)")
     sites.add_argument("--csv", metavar="FILE", help="also write one row per test episode "
                                                      "(along_mm, across_mm) to FILE")
+    sites.add_argument("--workers", type=int, metavar="N",
+                       help="processes that reset the test scenes (default: the number of CPU "
+                            "cores); the table is the same for any number")
     sites.add_argument("--no-progress", action="store_true", help="no progress bar")
     sites.set_defaults(func=cmd_grasp_sites)
 

@@ -5,10 +5,13 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
+import time
 from pathlib import Path
 
 from vgs.cli.options import (
     check_video_name,
+    config_label,
     flag_overrides,
     headless_gl_default,
     parse_offsets_mm,
@@ -22,6 +25,12 @@ from vgs.jsonsafe import dumps
 def cmd_demo(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     """One traced episode: phase table (or JSON record), DIR/demo.png and, with ``--video``, the
     episode rendered as a video."""
+    out = Path(args.out)
+    targets = [out / "demo.png", *([Path(args.video)] if args.video else [])]
+    existing = [str(path) for path in targets if path.exists() or path.is_symlink()]
+    if existing and not args.force:  # before the episode, not after it
+        raise ConfigError("demo", f"{', '.join(existing)} exists; add --force to overwrite, or "
+                                  "give another --out/--video")
     video_size = parse_video_size(args.video_size) if args.video else None
     if args.video:
         check_video_name(args.video)
@@ -36,8 +45,13 @@ def cmd_demo(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
 
     seed = cfg.seed if args.seed is None else args.seed
     peg = condition_peg(cfg.cell.peg, cfg.eval, args.condition, 1.0)
-    result = run_demo(cfg, seed, args.offset / 1000.0, policy=args.policy, peg=peg)
-    out = Path(args.out)
+    progress = None if args.no_progress else _demo_progress
+    started = time.monotonic()
+    result = run_demo(cfg, seed, args.offset / 1000.0, policy=args.policy, peg=peg,
+                      progress=progress)
+    if progress is not None:
+        print(f"demo: episode done, {result.trace.time[-1]:.1f} s simulated in "
+              f"{time.monotonic() - started:.0f} s wall", file=sys.stderr, flush=True)
     out.mkdir(parents=True, exist_ok=True)
     figure = demo_figure(result, out / "demo.png")
     video = None
@@ -54,6 +68,12 @@ def cmd_demo(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
         if video is not None:
             print(f"video           {video}")
     return 0
+
+
+def _demo_progress(simulated: float, wall: float) -> None:
+    """One progress line of ``vgs demo`` on stderr (every 2 s of wall time)."""
+    print(f"demo: episode at {simulated:.1f} s simulated, {wall:.0f} s wall", file=sys.stderr,
+          flush=True)
 
 
 def cmd_sweep(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
@@ -216,7 +236,7 @@ def cmd_config(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
         print(dumps([{"key": s.key, "value": s.value, "doc": s.doc} for s in items],
                     indent=2))
         return 0
-    print(f"# profile {args.profile}, resolved; each key takes --set KEY=VALUE (a Python "
+    print(f"# {config_label(args)}, resolved; each key takes --set KEY=VALUE (a Python "
           "literal or text)")
     print(format_settings(items))
     return 0

@@ -12,8 +12,9 @@ The package's modules follow what they configure: :mod:`vgs.config.cell` (peg, h
 force-torque sensor, camera, simulation), :mod:`vgs.config.control` (controller, assembly),
 :mod:`vgs.config.learning` (network, agent, reward, training), :mod:`vgs.config.conditions`
 (the test conditions, evaluation settings and test scenes), :mod:`vgs.config.experiment`
-(reproduction, :class:`ExperimentConfig`, the profiles) and :mod:`vgs.config.tree`
-(``override``, ``to_dict``, ``from_dict``, ``same_config``, ``without_retired``). Import the
+(reproduction, :class:`ExperimentConfig`, the profiles), :mod:`vgs.config.tree`
+(``override``, ``to_dict``, ``from_dict``, ``same_config``, ``without_retired``) and
+:mod:`vgs.config.configfile` (``read_config_file``: ``--config FILE``). Import the
 names from :mod:`vgs.config` itself.
 """
 
@@ -35,6 +36,7 @@ from vgs.config.conditions import (
     condition_peg,
     eval_scenes,
 )
+from vgs.config.configfile import read_config_file
 from vgs.config.control import AssemblyConfig, ControllerConfig
 from vgs.config.experiment import (
     PROFILES,
@@ -68,5 +70,5 @@ __all__ = [
     "ControllerConfig", "EvalConfig", "EvalScene", "ExperimentConfig", "FTSensorConfig",
     "GripperConfig", "HoleConfig", "NetworkConfig", "PegConfig", "ReproduceConfig", "RewardConfig",
     "SimConfig", "TrainConfig", "condition_peg", "eval_scenes", "from_dict", "override", "profile",
-    "same_config", "to_dict", "without_retired",
+    "read_config_file", "same_config", "to_dict", "without_retired",
 ]

@@ -27,6 +27,8 @@ from vgs.checkpoint import (
 )
 from vgs.errors import CorruptFileError, FolderBusyError, RunMismatchError
 from vgs.jsonsafe import dumps
+from vgs.revision import short_revision as short_revision  # re-exported for analysis/
+from vgs.revision import source_revision
 
 LOCK_NAME = ".lock"
 
@@ -230,9 +232,9 @@ def read_table(path: Path) -> Any:
 def provenance() -> dict[str, str]:
     """Where a result came from, recorded (never compared) in ``run.json``, an evaluation's
     ``meta.json``, ``reproduce.json``, the parquet tables' schema metadata and the report:
-    ``vgs_version``, ``source_revision`` (the git commit of the source tree vgs runs from, or
-    ``"installed package"`` when vgs runs from an installed copy, not from a checkout),
-    ``mujoco_version`` and ``torch_version`` (read from the installed distributions: torch is
+    ``vgs_version``, ``source_revision`` (:func:`vgs.revision.source_revision`: the git commit
+    of the checkout vgs runs from or of the tree its wheel was built from), ``mujoco_version``
+    and ``torch_version`` (read from the installed distributions: torch is
     not imported).
     """
     from importlib import metadata
@@ -245,32 +247,3 @@ def provenance() -> dict[str, str]:
 
     return {"vgs_version": version("vgs"), "source_revision": source_revision(),
             "mujoco_version": version("mujoco"), "torch_version": version("torch")}
-
-
-@functools.cache
-def source_revision() -> str:
-    """The git commit (``git rev-parse HEAD``) of the checkout vgs is imported from (an
-    editable install or ``PYTHONPATH=src``), with ``+modified`` when files under ``src/`` differ
-    from it; ``"installed package"`` when vgs runs from a copy outside a checkout (a wheel in
-    site-packages, even one inside another repository); ``"unknown"`` without git."""
-    import subprocess
-
-    src = Path(__file__).resolve().parents[2]  # src/vgs/runfolder/common.py -> src
-    root = src.parent
-    if src.name != "src" or not (root / "pyproject.toml").is_file():
-        return "installed package"
-    try:
-        def git(*args: str) -> subprocess.CompletedProcess[str]:
-            return subprocess.run(["git", *args], capture_output=True, text=True, cwd=root,
-                                  timeout=10)
-
-        top = git("rev-parse", "--show-toplevel").stdout.strip()
-        if not top or Path(top).resolve() != root:
-            return "installed package"
-        rev = git("rev-parse", "HEAD").stdout.strip()
-        if not rev:
-            return "unknown"
-        dirty = git("diff", "--quiet", "HEAD", "--", "src").returncode == 1
-        return rev + ("+modified" if dirty else "")
-    except (OSError, subprocess.SubprocessError):
-        return "unknown"

@@ -25,7 +25,7 @@ from vgs import checkpoint
 from vgs.columns import as_bool
 from vgs.config import ExperimentConfig, from_dict
 from vgs.errors import ConfigError, CorruptFileError
-from vgs.runfolder.common import engine_note, hosts_of, read_json
+from vgs.runfolder.common import engine_note, hosts_of, read_json, short_revision
 from vgs.runfolder.journal import read_journal
 from vgs.runfolder.layout import eval_jobs, train_runs
 
@@ -267,8 +267,8 @@ def format_status(path: Path) -> str:
     if (path / "reproduce.json").exists():
         meta = read_json(path / "reproduce.json")
         walls = ", ".join(f"{k} {v / 3600:.2f} h" for k, v in meta.get("stage_wall_s", {}).items())
-        lines[0] += (f": {meta.get('profile')} profile, commit "
-                     f"{str(meta.get('git_revision') or '?')[:7]}")
+        lines[0] += (f": {meta.get('profile')} profile, source "
+                     f"{short_revision(meta.get('git_revision'))}")
         if walls:
             lines.append(f"stage wall times so far: {walls}")
     for title, jobs in folder_status(path):

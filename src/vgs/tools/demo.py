@@ -11,6 +11,9 @@ policy saw: its Q heat map (a trained network) or the depth heightmap, with the 
 from __future__ import annotations
 
 import math
+import threading
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -68,8 +71,40 @@ def check_offset(offset: float, peg: PegConfig) -> None:
                                     f"stays on it for |offset| <= {limit * 1000:.1f} mm")
 
 
+class EpisodeTicker:
+    """Reports an episode's simulated time while it runs: a thread reads the cell's clock
+    (``data.time``, which the episode's reset sets to 0) every ``interval`` wall seconds and
+    calls ``report(simulated seconds, wall seconds)``; nothing of the episode is touched.
+
+    Use as a context manager around the episode.
+    """
+
+    def __init__(self, clock: Callable[[], float], report: Callable[[float, float], None],
+                 interval: float = 2.0) -> None:
+        self._clock = clock
+        self._report = report
+        self._interval = interval
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._loop, daemon=True, name="demo-progress")
+        self._start = 0.0
+
+    def _loop(self) -> None:
+        while not self._stop.wait(self._interval):
+            self._report(float(self._clock()), time.monotonic() - self._start)
+
+    def __enter__(self) -> EpisodeTicker:
+        self._start = time.monotonic()
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._stop.set()
+        self._thread.join()
+
+
 def run_demo(cfg: ExperimentConfig, seed: int, offset: float = 0.0, policy: str | None = None,
-             peg: PegConfig | None = None) -> DemoResult:
+             peg: PegConfig | None = None,
+             progress: Callable[[float, float], None] | None = None) -> DemoResult:
     """Run one traced episode.
 
     Args:
@@ -81,6 +116,8 @@ def run_demo(cfg: ExperimentConfig, seed: int, offset: float = 0.0, policy: str 
             ``vgs evaluate`` (its generator seeded ``[seed, 2]``), so an evaluation's episode
             of that seed and peg is the same episode.
         peg: The episode's peg (default: the configured one).
+        progress: Called every 2 s of wall time during the episode with the simulated and
+            the wall seconds so far (:class:`EpisodeTicker`).
 
     Raises:
         ConfigError: If the offset puts the pads off the peg, an offset comes with a policy, or
@@ -107,7 +144,12 @@ def run_demo(cfg: ExperimentConfig, seed: int, offset: float = 0.0, policy: str 
             chosen["decision"] = decision
             return decision.command
 
-    record, robot, hm = runner.run(seed, grasp, peg=peg, trace=True)
+    if progress is None:
+        record, robot, hm = runner.run(seed, grasp, peg=peg, trace=True)
+    else:
+        cell, _ = runner.cell(peg or cfg.cell.peg)  # the cell the episode will step
+        with EpisodeTicker(lambda: cell.data.time, progress):
+            record, robot, hm = runner.run(seed, grasp, peg=peg, trace=True)
     decision = chosen.get("decision")
     command = decision.command if decision is not None else offset_policy(offset)(hm)
     pixel = (decision.row, decision.col) if decision is not None and decision.row >= 0 else None
