@@ -62,7 +62,8 @@ def cmd_report(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     """Build DIR/report.md and DIR/report.html from the results in DIR."""
     from vgs.analysis.report import build_report
 
-    path = build_report(Path(args.dir), **({"title": args.title} if args.title else {}))
+    path = build_report(Path(args.dir), **({"title": args.title} if args.title else {}),
+                        center=Path(args.center) if args.center else None)
     print(f"wrote {path} and {path.with_suffix('.html')}")
     if args.publish:
         from vgs.tools.publish import publish
@@ -81,9 +82,11 @@ def cmd_seeds(args: argparse.Namespace, cfg: ExperimentConfig | None) -> int:
     """Compare VGS with the baseline across the training runs of several results folders."""
     from vgs.analysis.seeds import seeds_report
 
-    path = seeds_report([Path(d) for d in args.dirs], Path(args.out))
+    path = seeds_report([Path(d) for d in args.dirs], Path(args.out),
+                        center=Path(args.center) if args.center else None)
     print(path.read_text().split("![", 1)[0].rstrip())
-    print(f"\nwrote {path}, {path.with_suffix('.csv')} and {path.with_suffix('.png')}")
+    print(f"\nwrote {path}, {path.with_suffix('.csv')}, {path.with_suffix('.png')} and "
+          f"{path.with_name('profile.png')}")
     return 0
 
 
