@@ -191,7 +191,7 @@ def plot_seeds(table: pd.DataFrame, path: Path) -> Path:
     conditions = list(dict.fromkeys(table["condition"]))
     runs = sorted(set(table["train_run"]) - {"mean"}) + ["mean"]
     y_of = {run: float(len(runs) - 1 - i) for i, run in enumerate(runs)}
-    fig, axes = plt.subplots(1, len(conditions), figsize=(4.2 * len(conditions), 1.4 + 0.5 *
+    fig, axes = plt.subplots(1, len(conditions), figsize=(4.2 * len(conditions), 1.8 + 0.5 *
                              len(runs)), sharex=True, sharey=True, squeeze=False)
     for ax, condition in zip(axes[0], conditions, strict=True):
         part = table[table["condition"] == condition]
@@ -217,7 +217,8 @@ def plot_seeds(table: pd.DataFrame, path: Path) -> Path:
         paper = PAPER.get(condition, {}).get("gain")
         if paper is not None:
             ax.axvline(paper, color=GAIN_COLORS["paper"], ls="--", lw=1.2)
-            ax.text(paper, len(runs) - 0.45, f" paper {paper:+.2f} %", color=GAIN_COLORS["paper"],
+            ax.text(paper, len(runs) - 0.45, f" paper {paper:+.2f} % (total time)",
+                    color=GAIN_COLORS["paper"],
                     fontsize=8, va="center")
         ax.set_ylim(-0.6, len(runs) - 0.2)
         ax.set_title(CONDITION_TITLES.get(condition, condition), fontsize=9)
@@ -227,10 +228,11 @@ def plot_seeds(table: pd.DataFrame, path: Path) -> Path:
     axes[0][0].plot([], [], "-", color="black", lw=2.5, label="bootstrap interval")
     axes[0][0].errorbar([], [], xerr=[], fmt="none", ecolor="black", capsize=3,
                         label="mean: Student's t interval over runs")
-    axes[0][0].legend(fontsize=7, loc="lower left")
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    fig.legend(handles, labels, fontsize=8, loc="lower center", ncol=4)
     axes[0][0].set_yticks(list(y_of.values()), runs)
     axes[0][0].set_ylabel("training run")
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -51,9 +51,12 @@ def cmd_curves(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
           f"{'|l| [mm]':>8} {'reward':>6}")
     for label, phases in summaries.items():
         for phase, s in phases.items():
+            assembly = (f"{'skipped':>8} {'-':>7}" if s["assembly_skipped"] else
+                        f"{s['assembly_success']:>8.2f} {s['assembly_time_mean_s']:>7.1f}")
+            stops = (f"  ({s['threshold_stops']} assemblies stopped at the threshold)"
+                     if s["threshold_stops"] else "")
             print(f"{label:<28} {phase:<12} {s['episodes']:>4} {s['grasp_success']:>6.2f} "
-                  f"{s['assembly_success']:>8.2f} {s['assembly_time_mean_s']:>7.1f} "
-                  f"{s['abs_offset_mean_mm']:>8.1f} {s['reward_mean']:>6.3f}")
+                  f"{assembly} {s['abs_offset_mean_mm']:>8.1f} {s['reward_mean']:>6.3f}{stops}")
     print(f"wrote {args.out}")
     return 0
 
