@@ -53,7 +53,7 @@ from vgs.checkpoint import atomic_write_text  # noqa: E402
 from vgs.columns import rounded  # noqa: E402
 from vgs.config import CONDITIONS  # noqa: E402
 from vgs.errors import ConfigError  # noqa: E402
-from vgs.runfolder.common import read_json, read_table  # noqa: E402
+from vgs.runfolder.common import duration_text, read_json, read_table  # noqa: E402
 from vgs.runfolder.layout import eval_tables, holds_network, train_folders  # noqa: E402
 
 
@@ -321,23 +321,23 @@ def _provenance_section(doc: Doc, out: Path, df: pd.DataFrame, meta: dict[str, A
         stages = meta.get("stage_wall_s", {})
         if stages:
             doc.p("Wall time per stage: " + ", ".join(
-                f"{k} {v / 60:.1f} min" for k, v in stages.items())
-                + f" ({sum(stages.values()) / 3600:.2f} h in all).")
+                f"{k} {duration_text(v)}" for k, v in stages.items())
+                + f" ({duration_text(sum(stages.values()))} in all).")
         own = {run.name: read_table(run / "episodes.csv")["wall_s"].sum() / 3600.0
                for run in train_folders(out) if (run / "episodes.csv").exists()}
         if own:
             doc.p("Each training run's own wall time, the sum of its table's `wall_s` (it "
                   "counts a run trained outside `vgs reproduce`, interrupted or moved between "
                   "machines; runs trained side by side overlap): " + ", ".join(
-                      f"{name} {h:.2f} h" for name, h in own.items()) + ".")
+                      f"{name} {duration_text(3600 * h)}" for name, h in own.items()) + ".")
         tests = eval_wall_h(df)
         if tests:
             doc.p("The test episodes' own wall time, the sum of their `wall_s` per policy (it "
                   "counts evaluations interrupted or moved between machines, which the stage "
                   "times above miss; episodes run side by side overlap, so the elapsed time is "
                   "about this sum over the number of workers): " + ", ".join(
-                      f"{name} {h:.2f} h" for name, h in tests.items())
-                  + f" ({sum(tests.values()):.2f} h in all).")
+                      f"{name} {duration_text(3600 * h)}" for name, h in tests.items())
+                  + f" ({duration_text(3600 * sum(tests.values()))} in all).")
         train_cfg = meta.get("config", {}).get("train", {})
         shortcuts = []
         if train_cfg.get("assemble_baseline") is False:
