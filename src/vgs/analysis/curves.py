@@ -46,12 +46,12 @@ def load_episodes(run_dir: Path) -> tuple[pd.DataFrame, dict]:
 
 def skipped(df: pd.DataFrame) -> pd.Series:
     """Rows whose grasp ran without the assembly (``train.assemble_baseline = False``)."""
-    return df.failure_reason.fillna("").astype(str).eq("no_assembly")
+    return df.failure_reason.astype(object).fillna("").astype(str).eq("no_assembly")
 
 
 def stopped(df: pd.DataFrame) -> pd.Series:
     """Rows whose assembly stopped at the frozen reward threshold (``train.stop_at_threshold``)."""
-    return df.failure_reason.fillna("").astype(str).str.startswith("cutoff:")
+    return df.failure_reason.astype(object).fillna("").astype(str).str.startswith("cutoff:")
 
 
 def summarize(df: pd.DataFrame, random_episodes: int, window: int) -> dict[str, float]:

@@ -10,7 +10,7 @@ gap) and writes the tables into a :class:`~vgs.analysis.reportdoc.Doc`. docs/eva
 defines every number.
 
 The centre heuristic's tests come from the reproduction itself (``eval/center/``) or from
-another results folder (``--center DIR``, :func:`load_center`), which must hold the same test
+another results folder (``--center DIR``, :func:`check_center`), which must hold the same test
 scenes: the same root seed and, index by index, the same scene seeds.
 """
 
@@ -97,24 +97,18 @@ def condition_pairs(df: pd.DataFrame, condition: str
     return pairs
 
 
-def load_center(folder: Path, tests: pd.DataFrame) -> pd.DataFrame:
-    """The centre heuristic's test episodes in results folder ``folder``, checked against the
-    scenes of ``tests`` (the learned policies' tables).
+def check_center(center: pd.DataFrame, tests: pd.DataFrame, source: Path) -> pd.DataFrame:
+    """The centre heuristic's test episodes of ``center`` (a results folder's tables, read
+    from ``source``), checked against the scenes of ``tests`` (the learned policies' tables).
 
     Raises:
-        ConfigError: If ``folder`` holds no centre evaluation, or one of its conditions was
+        ConfigError: If ``center`` holds no centre evaluation, or one of its conditions was
             tested on other scenes than ``tests`` (another root seed, other episode indices
             or other scene seeds).
     """
-    from vgs.analysis.report import load_results
-
-    try:
-        df = load_results(folder)
-    except ConfigError as exc:
-        raise ConfigError("center", exc.message) from exc
-    center = df[df["policy"] == "center"]
+    center = center[center["policy"] == "center"]
     if center.empty:
-        raise ConfigError("center", f"{folder} holds no centre-heuristic evaluation "
+        raise ConfigError("center", f"{source} holds no centre-heuristic evaluation "
                                     "(eval/center/<condition>/)")
     for condition in sorted(set(center["condition"]) & set(tests["condition"])):
         mine = center[center["condition"] == condition].sort_values("index")
@@ -124,7 +118,7 @@ def load_center(folder: Path, tests: pd.DataFrame) -> pd.DataFrame:
                 and list(mine["seed"]) == list(theirs["seed"])
                 and set(mine["root_seed"].astype(str)) == set(theirs["root_seed"].astype(str)))
         if not same:
-            raise ConfigError("center", f"{folder}: its {condition} tests are not the same scenes "
+            raise ConfigError("center", f"{source}: its {condition} tests are not the same scenes "
                                         "(root seed, episode indices or scene seeds differ); "
                                         "evaluate the centre with the same reproduce.eval_seed "
                                         "and eval.episodes")

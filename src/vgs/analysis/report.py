@@ -96,6 +96,22 @@ def load_results(out: Path) -> pd.DataFrame:
     return pd.concat([read_table(t) for t in tables], ignore_index=True)
 
 
+def load_center(folder: Path, tests: pd.DataFrame) -> pd.DataFrame:
+    """The centre heuristic's tests in results folder ``folder``, on the scenes of ``tests``
+    (:func:`vgs.analysis.makeup.check_center`).
+
+    Raises:
+        ConfigError: If ``folder`` holds no results, no centre evaluation or other scenes.
+    """
+    from vgs.analysis.makeup import check_center
+
+    try:
+        center = load_results(folder)
+    except ConfigError as exc:
+        raise ConfigError("center", exc.message) from exc
+    return check_center(center, tests, folder)
+
+
 def eval_wall_h(df: pd.DataFrame) -> dict[str, float]:
     """Each policy's summed test-episode wall time [h] (the ``wall_s`` column); empty for
     tables written before it was recorded."""
@@ -265,7 +281,7 @@ def build_report(out: Path, title: str | None = None, center: Path | None = None
             of the same test scenes.
     """
     df = load_results(out)
-    from vgs.analysis.makeup import load_center, makeups, write_makeup, write_regret
+    from vgs.analysis.makeup import makeups, write_makeup, write_regret
 
     centre = load_center(center, df) if center is not None else None
     figures = out / "figures"

@@ -46,13 +46,12 @@ import pandas as pd  # noqa: E402
 
 from vgs.analysis.makeup import (  # noqa: E402
     center_of,
-    load_center,
     makeups,
     write_makeup,
     write_regret,
 )
 from vgs.analysis.palette import GAIN_COLORS, policy_color  # noqa: E402
-from vgs.analysis.report import PAPER, load_results  # noqa: E402
+from vgs.analysis.report import PAPER, load_center, load_results  # noqa: E402
 from vgs.analysis.reportdoc import Doc  # noqa: E402
 from vgs.analysis.reportfigures import CONDITION_TITLES, LEARNED  # noqa: E402
 from vgs.analysis.stats import (  # noqa: E402

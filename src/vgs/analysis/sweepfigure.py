@@ -110,7 +110,7 @@ def _moment_axis(ax: Axes, cfg: ExperimentConfig, offsets: np.ndarray) -> None:
     twin.plot(1000 * lever, f_g * m_g, "C3-", lw=1.2,
               label=f"M_G [{u_g}] = m g |l| sin(beta), beta = {a.search_tilt_deg:g} deg "
                     "(search tilt)")
-    twin.set_ylabel(f"M_G [{u_g}], m = {cfg.cell.peg.mass:g} kg", color="C3")
+    twin.set_ylabel(f"M_G [{u_g}] (solid), m = {cfg.cell.peg.mass:g} kg")
     twin.set_ylim(bottom=0)
     third = ax.twinx()
     third.spines.right.set_position(("axes", 1.14))
@@ -118,7 +118,7 @@ def _moment_axis(ax: Axes, cfg: ExperimentConfig, offsets: np.ndarray) -> None:
     third.plot(1000 * lever, f_i * m_i, "C1--", lw=1.2,
                label=f"M_I [{u_i}] = (1/2) m l^2 (2 pi / T)^2 A, sinusoidal wiggle "
                      f"A = {a.wiggle_amplitude_deg:g} deg, T = {a.wiggle_period:g} s")
-    third.set_ylabel(f"M_I [{u_i}] (right axis, outer)", color="C1")
+    third.set_ylabel(f"M_I [{u_i}] (outer right axis, dashed)")
     third.set_ylim(bottom=0)
     lines = ax.get_legend_handles_labels()
     handles, labels = lines
