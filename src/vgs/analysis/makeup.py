@@ -38,6 +38,7 @@ from vgs.analysis.stats import (
     failed_share_pct,
     mean_gain,
     phase_gap,
+    phase_variance_shares,
     regret,
     site_gap,
     t_interval,
@@ -57,6 +58,9 @@ class Makeup:
         runs: The training runs' names.
         phases: Per phase the part of the gap in the mean time of successes [s] (``gap``: the
             gap itself, ``other``: what the phases do not hold).
+        variance: Per policy (baseline, vgs), each phase's share of the variance of the
+            successes' times (:func:`~vgs.analysis.stats.phase_variance_shares`), mean over
+            runs.
         along: Per site along the axis, its part of that gap (:class:`SitePart`).
         across: The same across the axis; None when the tables do not hold ``across_mm``.
         failed_share_pct: Per run, the failed attempts' share of the gain in total time [%].
@@ -72,6 +76,7 @@ class Makeup:
     condition: str
     runs: tuple[str, ...]
     phases: dict[str, float]
+    variance: dict[str, dict[str, float]]
     along: list[SitePart]
     across: list[SitePart] | None
     failed_share_pct: tuple[float, ...]
@@ -159,10 +164,13 @@ def gain_makeup(condition: str, pairs: list[tuple[str, pd.DataFrame, pd.DataFram
     """:class:`Makeup` of ``pairs`` (:func:`condition_pairs`), with VGS's regret against
     ``center`` when given."""
     phases, along, across, within_phases = [], [], [], []
+    variance: dict[str, list[dict[str, float]]] = {p: [] for p in LEARNED}
     failed, totals, scenes, within_pairs = [], [], [], []
     has_across = True
     for _, base, vgs in pairs:
         phases.append(phase_gap(base, vgs))
+        for policy, table in zip(LEARNED, (base, vgs), strict=True):
+            variance[policy].append(phase_variance_shares(table))
         along.append(site_gap(along_sites(base["grasp_offset_mm"]), base,
                               along_sites(vgs["grasp_offset_mm"]), vgs, ALONG_SITES))
         sb, sv = across_sites(base), across_sites(vgs)
@@ -184,6 +192,7 @@ def gain_makeup(condition: str, pairs: list[tuple[str, pd.DataFrame, pd.DataFram
         regrets = tuple(regret(center, vgs) for _, _, vgs in pairs
                         if list(center["index"]) == list(vgs["index"]))
     return Makeup(condition, tuple(r for r, _, _ in pairs), _mean_dicts(phases),
+                  {p: _mean_dicts([v for v in variance[p] if v]) for p in LEARNED},
                   _mean_parts(along), _mean_parts(across) if has_across else None,
                   tuple(failed), tuple(totals), mean_gain(within_pairs),
                   _mean_dicts([p for p in within_phases if p]), tuple(scenes), regrets or None)
@@ -247,6 +256,11 @@ def write_makeup(doc: Doc, items: list[Makeup], command: str) -> None:
     rows = [[k, *(cell(m, k) for m in items)] for k in [*keys, "gap"]]
     rows[-1][0] = "**gap**"
     doc.table(["phase", *(f"{m.condition} [s] (share of the gap)" for m in items)], rows)
+    doc.p("Each phase's share of the variance of the successes' times, cov(t_phase, T) / "
+          "var(T), baseline / VGS (the shares sum to 100 %):")
+    doc.table(["phase", *(m.condition for m in items)],
+              [[k, *(" / ".join(_pct(m.variance.get(p, {}).get(k, math.nan)) for p in LEARNED)
+                     for m in items)] for k in keys if k != "other"])
     head = ["site", "share of successes, base / VGS", "mean time [s], base / VGS",
             "mix [s]", "rate [s]", "part of the gap [s]"]
     for m in items:

@@ -274,6 +274,23 @@ def phase_gap(base: pd.DataFrame, vgs: pd.DataFrame) -> dict[str, float]:
     return out
 
 
+def phase_variance_shares(df: pd.DataFrame) -> dict[str, float]:
+    """Each phase's share of the variance of the successes' assembly time,
+
+        cov(t_phase, T) / var(T),   T = sum_p t_p,
+
+    over the successes; the shares sum to 1 (a phase that varies with the total carries its
+    part). Empty for fewer than two successes or no variance."""
+    ok = df["assembly_success"].to_numpy(bool)
+    total = df["assembly_time_s"].to_numpy(float)[ok]
+    if total.size < 2 or np.var(total) == 0:
+        return {}
+    centred = total - total.mean()
+    return {c[len(PHASE_PREFIX):-len(PHASE_SUFFIX)]: float(
+        np.mean((df[c].to_numpy(float)[ok] - df[c].to_numpy(float)[ok].mean()) * centred)
+        / np.var(total)) for c in phase_columns(df)}
+
+
 def along_sites(offset_mm: np.ndarray | pd.Series) -> np.ndarray:
     """Each grasp's site along the axis (:data:`ALONG_SITES` by ``|grasp_offset_mm|``, the
     edges belonging to the outer site; :data:`NO_GRASP` for NaN)."""
