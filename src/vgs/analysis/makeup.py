@@ -316,7 +316,8 @@ def write_regret(doc: Doc, items: list[Makeup], command: str) -> None:
             parts = [("n/a" if r.parts.get(p) is None else
                       f"{_s(r.parts[p][0])} ({r.parts[p][3]})") for p in REGRET_PARTS]
             rows.append([m.condition, run, str(r.n),
-                         f"{_s(r.mean_s)} [{_s(r.low)}, {_s(r.high)}]", *parts,
+                         _s(r.mean_s) + (f" [{_s(r.low)}, {_s(r.high)}]"
+                                         if math.isfinite(r.low) else ""), *parts,
                          r.total_pct.text(), f"{r.failures_vgs} / {r.failures_center}"])
         regrets = m.regrets or ()
         if len(regrets) > 1:

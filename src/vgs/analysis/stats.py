@@ -444,27 +444,33 @@ def regret(center: pd.DataFrame, vgs: pd.DataFrame, resamples: int = BOOTSTRAP_R
     tv, ov = time_arrays(v)
     both = oc & ov
     fails = int((~ov).sum()), int((~oc).sum())
-    if both.sum() < MIN_SUCCESSES:
-        return Regret(int(both.sum()), math.nan, math.nan, math.nan, {}, t_pct, *fails)
+    if not both.any():
+        return Regret(0, math.nan, math.nan, math.nan, {}, t_pct, *fails)
     d = (tv - tc)[both]
     research = (v["retries"].to_numpy(float) > c["retries"].to_numpy(float))[both]
     sites = across_sites(v)
     flank = (None if sites is None else (sites == ACROSS_SITES[1])[both] & ~research)
     along = ~research if flank is None else ~research & ~flank
     masks = {"re-searches": research, "flank pixels": flank, "along-axis offset": along}
+    # Fewer than MIN_SUCCESSES scenes both assembled: the values without intervals.
     rng = np.random.default_rng(seed)
-    idx = rng.integers(d.size, size=(resamples, d.size))
-    boot = d[idx].mean(axis=1)
+    idx = (rng.integers(d.size, size=(resamples, d.size)) if d.size >= MIN_SUCCESSES
+           else None)
+
+    def interval(x: np.ndarray) -> tuple[float, float]:
+        if idx is None:
+            return math.nan, math.nan
+        lo, hi = np.percentile(x[idx].mean(axis=1), [2.5, 97.5])
+        return float(lo), float(hi)
+
     parts: dict[str, tuple[float, float, float, int] | None] = {}
     for name, mask in masks.items():
         if mask is None:
             parts[name] = None
             continue
         dm = np.where(mask, d, 0.0)
-        lo, hi = np.percentile(dm[idx].mean(axis=1), [2.5, 97.5])
-        parts[name] = (float(dm.mean()), float(lo), float(hi), int(mask.sum()))
-    low, high = np.percentile(boot, [2.5, 97.5])
-    return Regret(int(d.size), float(d.mean()), float(low), float(high), parts, t_pct, *fails)
+        parts[name] = (float(dm.mean()), *interval(dm), int(mask.sum()))
+    return Regret(int(d.size), float(d.mean()), *interval(d), parts, t_pct, *fails)
 
 
 # -- across training runs: the crossed bootstrap and the field's statistics ---------------------
