@@ -145,7 +145,7 @@ def test_report_states_each_runs_own_wall_time(tmp_path: Path) -> None:
                                                              index=False)
     text = build_report(run).read_text()
     assert "train 30.0 min, evaluate 90.0 min (2.00 h in all)" in text
-    assert "baseline_s0 0.50 h, vgs_s0 1.50 h" in text
+    assert "baseline_s0 30.0 min, vgs_s0 90.0 min" in text
     # The test episodes' own wall time, from the tables' wall_s (DATA's sums: 76.073 s,
-    # 58.056 s and 75.808 s).
-    assert "baseline 0.02 h, center 0.02 h, vgs 0.02 h (0.06 h in all)" in text
+    # 58.056 s and 75.808 s), in the unit that fits (it read "0.02 h" each).
+    assert "baseline 76 s, center 58 s, vgs 76 s (3.5 min in all)" in text

@@ -4,7 +4,8 @@ The untrained network is the run's network at its initial parameters (same seed,
 the trained one is loaded from the run's checkpoint. Each panel shows the Q map of the position
 action (``network.action = position``: one map, jaws across the perceived axis), or
 ``max_k Q(k, i, j)`` over the rotations of the rotation action, drawn over the colour heightmap,
-and marks the greedy grasp on the peg.
+and marks the greedy grasp on the peg. The two panels of a scene share one colour scale (the
+range of both maps over the peg's pixels) and one colour bar.
 """
 
 from __future__ import annotations
@@ -43,18 +44,26 @@ def plot_heatmaps(run_dir: Path, out: Path, scenes: int = 2, seed: int = 12345) 
     cfg, mode, untrained, trained = load_run(run_dir)
     runner = EpisodeRunner(cfg)
     label = "Q" if cfg.network.action == "position" else "max over rotations of Q"
-    fig, axes = plt.subplots(scenes, 2, figsize=(8, 4 * scenes), squeeze=False)
+    fig, axes = plt.subplots(scenes, 2, figsize=(9, 4 * scenes), squeeze=False,
+                             layout="constrained")
     for s in range(scenes):
         hm = runner.observe(episode_seed(seed, s))
         mask = peg_mask(hm.depth)
         extent = (hm.origin[0], hm.origin[0] + hm.depth.shape[1] * hm.pixel_size,
                   hm.origin[1], hm.origin[1] + hm.depth.shape[0] * hm.pixel_size)
-        for col, (agent, title) in enumerate(((untrained, "untrained"), (trained, "trained"))):
-            q = agent.q_values(hm.color, hm.depth).max(axis=0)
+        pair = [(agent.q_values(hm.color, hm.depth).max(axis=0), title)
+                for agent, title in ((untrained, "untrained"), (trained, "trained"))]
+        # One colour scale for the pair, over the peg's pixels of both maps: the two panels
+        # compare by colour.
+        on_peg = np.concatenate([q[mask] for q, _ in pair]) if mask.any() else \
+            np.concatenate([q.ravel() for q, _ in pair])
+        vmin, vmax = float(on_peg.min()), float(on_peg.max())
+        for col, (q, title) in enumerate(pair):
             ax = axes[s, col]
             ax.imshow(hm.color, origin="lower", extent=extent)
             shown = np.ma.masked_where(~mask, q)
-            im = ax.imshow(shown, origin="lower", extent=extent, cmap="jet", alpha=0.75)
+            im = ax.imshow(shown, origin="lower", extent=extent, cmap="jet", alpha=0.75,
+                           vmin=vmin, vmax=vmax)
             masked = np.where(mask, q, -np.inf)
             i, j = np.unravel_index(int(np.argmax(masked)), q.shape)
             x, y = hm.pixel_to_world(i, j)
@@ -68,9 +77,9 @@ def plot_heatmaps(run_dir: Path, out: Path, scenes: int = 2, seed: int = 12345) 
             ax.set_title(f"{title} ({mode})")
             ax.set_xlabel("x [m]")
             ax.set_ylabel("y [m]")
-            fig.colorbar(im, ax=ax, fraction=0.046, label=label)
+        fig.colorbar(im, ax=list(axes[s]), fraction=0.046, label=f"{label} (one scale for "
+                                                                 "the pair)")
     fig.suptitle("Grasp Q values on the peg (cross: greedy grasp)")
-    fig.tight_layout()
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=110)
     plt.close(fig)

@@ -44,22 +44,31 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from vgs.analysis.palette import GAIN_COLORS  # noqa: E402
-from vgs.analysis.report import PAPER, load_results  # noqa: E402
+from vgs.analysis.makeup import (  # noqa: E402
+    center_of,
+    makeups,
+    write_makeup,
+    write_regret,
+)
+from vgs.analysis.palette import GAIN_COLORS, policy_color  # noqa: E402
+from vgs.analysis.report import PAPER, load_center, load_results  # noqa: E402
+from vgs.analysis.reportdoc import Doc  # noqa: E402
 from vgs.analysis.reportfigures import CONDITION_TITLES, LEARNED  # noqa: E402
 from vgs.analysis.stats import (  # noqa: E402
     ALIGN_GAIN,
-    BOOTSTRAP_RESAMPLES,
     GAINS,
     MEAN_GAIN,
     SUCCESS_TOTAL_GAIN,
     TOTAL_GAIN,
-    Measure,
     efficiency_gain,
+    improvement_probability,
+    iqm_interval,
+    mean_gain,
     sample_std,
     summarize,
     t_interval,
     time_arrays,
+    win_matrix,
 )
 from vgs.columns import rounded  # noqa: E402
 from vgs.config import CONDITIONS  # noqa: E402
@@ -115,58 +124,6 @@ def load_seeds(folders: list[Path]) -> pd.DataFrame:
                                        f"{sorted(sizes)}); evaluate them with the same "
                                        "reproduce.eval_seed and eval.episodes")
     return df
-
-
-def mean_gain(pairs: list[tuple[pd.DataFrame, pd.DataFrame]],
-              resamples: int = BOOTSTRAP_RESAMPLES, seed: int = 0,
-              measure: Measure = MEAN_GAIN) -> tuple[float, float, float]:
-    """Mean over training runs of the gain, with the crossed bootstrap's 95 % interval (runs
-    and one shared draw of test scenes per replicate; module docstring).
-
-    Args:
-        pairs: ``(baseline table, VGS table)`` of each training run, on the same test scenes
-            (the same episode indices).
-        resamples: Bootstrap resamples.
-        seed: Seed of the resampling.
-        measure: The gain of one run on given scenes: ``MEAN_GAIN`` (mean of the successes)
-            or ``TOTAL_GAIN`` (total time of all attempts), :mod:`vgs.analysis.stats`.
-
-    Returns:
-        ``(mean gain, low, high)`` in percent; the interval is NaN when a run has fewer than
-        ``measure.min_successes`` successes for either policy.
-
-    Raises:
-        ConfigError: If the tables do not hold the same episode indices.
-    """
-    indices = {tuple(np.sort(t["index"].to_numpy())) for pair in pairs for t in pair}
-    if len(indices) > 1:
-        raise ConfigError("seeds", "the training runs' tables do not hold the same test "
-                                   "episodes; the crossed bootstrap needs shared scenes")
-    if any(measure.column not in t.columns for pair in pairs for t in pair):
-        return math.nan, math.nan, math.nan  # tables written without that column
-    arrays = [(*time_arrays(b, measure.column), *time_arrays(v, measure.column))
-              for b, v in pairs]
-    gains = [measure(*a) for a in arrays]
-    value = float(np.mean(gains)) if gains else math.nan
-    if (not math.isfinite(value)
-            or min(min(a[1].sum(), a[3].sum()) for a in arrays) < measure.min_successes):
-        return value, math.nan, math.nan
-    rng = np.random.default_rng(seed)
-    out = np.empty(resamples)
-    n = len(arrays[0][0])
-    for b in range(resamples):
-        runs = rng.integers(len(arrays), size=len(arrays))
-        i = rng.integers(n, size=n)  # one draw of the shared scenes for every drawn run
-        total = 0.0
-        for s in runs:
-            tb, ob, tv, ov = arrays[s]
-            total += measure(tb[i], ob[i], tv[i], ov[i])
-        out[b] = total / len(arrays)
-    out = out[np.isfinite(out)]
-    if not out.size:
-        return value, math.nan, math.nan
-    low, high = np.percentile(out, [2.5, 97.5])
-    return value, float(low), float(high)
 
 
 def seeds_table(df: pd.DataFrame) -> pd.DataFrame:
@@ -233,7 +190,7 @@ def plot_seeds(table: pd.DataFrame, path: Path) -> Path:
     conditions = list(dict.fromkeys(table["condition"]))
     runs = sorted(set(table["train_run"]) - {"mean"}) + ["mean"]
     y_of = {run: float(len(runs) - 1 - i) for i, run in enumerate(runs)}
-    fig, axes = plt.subplots(1, len(conditions), figsize=(4.2 * len(conditions), 1.4 + 0.5 *
+    fig, axes = plt.subplots(1, len(conditions), figsize=(4.2 * len(conditions), 1.8 + 0.5 *
                              len(runs)), sharex=True, sharey=True, squeeze=False)
     for ax, condition in zip(axes[0], conditions, strict=True):
         part = table[table["condition"] == condition]
@@ -246,6 +203,12 @@ def plot_seeds(table: pd.DataFrame, path: Path) -> Path:
                 if math.isfinite(row[f"{key}_ci_low"]):
                     ax.plot([row[f"{key}_ci_low"], row[f"{key}_ci_high"]], [yi, yi],
                             color=color, lw=2.5 if mean else 1.5)
+                t_low = row.get(f"{key}_t_low", math.nan)
+                if mean and isinstance(t_low, float) and math.isfinite(t_low):
+                    # Student's t interval over the runs, drawn below the bootstrap's
+                    ax.errorbar(row[f"{key}_pct"], yi - 0.09, xerr=[[row[f"{key}_pct"] - t_low],
+                                [row[f"{key}_t_high"] - row[f"{key}_pct"]]], fmt="none",
+                                ecolor=color, elinewidth=1.0, capsize=3, ls="--")
                 ax.plot(row[f"{key}_pct"], yi,
                         "D" if mean else ("o" if key == MEAN_GAIN.name else "s"),
                         color=color, ms=7 if mean else 5)
@@ -253,17 +216,22 @@ def plot_seeds(table: pd.DataFrame, path: Path) -> Path:
         paper = PAPER.get(condition, {}).get("gain")
         if paper is not None:
             ax.axvline(paper, color=GAIN_COLORS["paper"], ls="--", lw=1.2)
-            ax.text(paper, len(runs) - 0.45, f" paper {paper:+.2f} %", color=GAIN_COLORS["paper"],
+            ax.text(paper, len(runs) - 0.45, f" paper {paper:+.2f} % (total time)",
+                    color=GAIN_COLORS["paper"],
                     fontsize=8, va="center")
         ax.set_ylim(-0.6, len(runs) - 0.2)
         ax.set_title(CONDITION_TITLES.get(condition, condition), fontsize=9)
-        ax.set_xlabel("efficiency gain of VGS [%] (95 % CI)")
+        ax.set_xlabel("efficiency gain of VGS [%] (95 % intervals)")
     axes[0][0].plot([], [], "o", color=GAIN_COLORS["gain"], label="mean time of successes")
     axes[0][0].plot([], [], "s", color=GAIN_COLORS["total_gain"], label="total time of all tests")
-    axes[0][0].legend(fontsize=7, loc="lower left")
+    axes[0][0].plot([], [], "-", color="black", lw=2.5, label="bootstrap interval")
+    axes[0][0].errorbar([], [], xerr=[], fmt="none", ecolor="black", capsize=3,
+                        label="mean: Student's t interval over runs")
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    fig.legend(handles, labels, fontsize=8, loc="lower center", ncol=4)
     axes[0][0].set_yticks(list(y_of.values()), runs)
     axes[0][0].set_ylabel("training run")
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -288,14 +256,24 @@ def _gain_text(row: pd.Series, key: str = MEAN_GAIN.name) -> str:
     return text
 
 
-def _interval_verdict(low: float, high: float) -> str:
+def _interval_verdict(mean: pd.Series, key: str) -> str:
+    """What the mean gain ``key`` establishes: a claim needs both its intervals (the crossed
+    bootstrap and, with two runs or more, Student's t) on one side of zero; where either
+    crosses zero the direction is "not established"."""
+    low, high = mean[f"{key}_ci_low"], mean[f"{key}_ci_high"]
+    t_low, t_high = mean.get(f"{key}_t_low", math.nan), mean.get(f"{key}_t_high", math.nan)
     if not math.isfinite(low):
         return "too few successes for an interval."
-    if low > 0:
-        return "its interval lies above zero."
-    if high < 0:
-        return "its interval lies below zero: VGS is slower here."
-    return "its interval includes zero: no difference shown."
+    both = f"bootstrap [{low:+.1f}, {high:+.1f}]"
+    bounds = [(low, high)]
+    if isinstance(t_low, float) and math.isfinite(t_low):
+        both += f" and t [{t_low:+.1f}, {t_high:+.1f}]"
+        bounds.append((t_low, t_high))
+    if all(lo > 0 for lo, _ in bounds):
+        return f"its intervals, {both}, lie above zero: VGS faster, established."
+    if all(hi < 0 for _, hi in bounds):
+        return f"its intervals, {both}, lie below zero: VGS slower here, established."
+    return (f"not established: of its intervals, {both}, at least one includes zero.")
 
 
 def summary_rows(table: pd.DataFrame) -> list[str]:
@@ -331,10 +309,12 @@ def summary_rows(table: pd.DataFrame) -> list[str]:
     return lines
 
 
-def seeds_markdown(table: pd.DataFrame, folders: list[Path], dest: Path, figure: str) -> str:
+def seeds_markdown(table: pd.DataFrame, folders: list[Path], dest: Path, figure: str,
+                   center: Path | None = None) -> str:
     """The tables of :func:`seeds_table` as Markdown."""
     lines = ["# VGS against the baseline, across training seeds", "",
-             "Written by `vgs seeds " + " ".join(str(f) for f in folders) + f" --out {dest}` "
+             "Written by `vgs seeds " + " ".join(str(f) for f in folders) + f" --out {dest}"
+             + (f" --center {center}" if center is not None else "") + "` "
              "(module `vgs.analysis.seeds`). Each training run trains one baseline and one "
              "VGS network; both meet the same test scenes. Gain: (T_baseline - T_VGS) / "
              "T_baseline on the mean time of successful assemblies, 95 % interval from the "
@@ -397,16 +377,16 @@ def seeds_markdown(table: pd.DataFrame, folders: list[Path], dest: Path, figure:
             verdict += (f"{seeds} training runs: the crossed bootstrap redraws these {seeds} "
                         "values only and can understate the spread between runs, so read the "
                         "t interval beside it; ")
-        verdict += "the mean gain: " + _interval_verdict(mean["gain_ci_low"],
-                                                          mean["gain_ci_high"])
+        verdict += "the mean gain: " + _interval_verdict(mean, MEAN_GAIN.name)
         verdict += (f" In total time, {int(mean['seeds_with_positive_total_gain'])} of {seeds} "
                     "training runs give VGS the shorter total; the mean gain in total time: "
-                    + _interval_verdict(mean["total_gain_ci_low"], mean["total_gain_ci_high"]))
+                    + _interval_verdict(mean, TOTAL_GAIN.name))
         verdict += (f" In the alignment phase, {int(mean['seeds_with_positive_align_gain'])} of "
                     f"{seeds} training runs give VGS the shorter mean; the mean gain: "
-                    + _interval_verdict(mean["align_gain_ci_low"], mean["align_gain_ci_high"]))
+                    + _interval_verdict(mean, ALIGN_GAIN.name))
         if paper is not None:
-            verdict += f" The paper reports {paper:+.2f} %."
+            verdict += (f" The paper reports {paper:+.2f} %, on its total time over 1000 tests "
+                        "(none reported failed): the like of our gain in total time.")
         totals = PAPER.get(condition, {}).get("time_total_h")
         if totals is not None:
             verdict += (f" The paper's own measure, the total time of its 1000 tests (every one "
@@ -417,12 +397,142 @@ def seeds_markdown(table: pd.DataFrame, folders: list[Path], dest: Path, figure:
     return "\n".join(lines)
 
 
-def seeds_report(folders: list[Path], dest: Path) -> Path:
-    """Write ``dest/seeds.md``, ``seeds.csv`` and ``seeds.png``; return the Markdown's path."""
-    table = seeds_table(load_seeds(folders))
+def _run_arrays(df: pd.DataFrame, condition: str, policy: str
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """``(times, successes)`` of ``policy`` on ``condition``, training runs x scenes (runs in
+    name order, scenes by index)."""
+    part = df[(df["condition"] == condition) & (df["policy"] == policy)]
+    runs = sorted(set(part["train_run"])) if "train_run" in part.columns else [None]
+    arrays = [time_arrays(part if run is None else part[part["train_run"] == run])
+              for run in runs]
+    return np.array([a[0] for a in arrays]), np.array([a[1] for a in arrays])
+
+
+def field_table(df: pd.DataFrame, center: pd.DataFrame | None = None) -> pd.DataFrame:
+    """Per condition, the statistics Agarwal et al. (2021) recommend for few runs: the
+    interquartile mean of the successes' assembly times per policy (pooled over runs and
+    scenes) and the probability that VGS assembles faster than the baseline, and than the
+    centre heuristic when given, on a random paired scene of a random run (a failed test is
+    slower than any success; two failures tie, :func:`vgs.analysis.stats.win_matrix`), each
+    with the crossed-bootstrap 95 % interval over runs and scenes
+    (:func:`vgs.analysis.stats.crossed_interval`; the centre has no run: its scenes only)."""
+    rows = []
+    for condition in [c for c in CONDITIONS if c in set(df["condition"])]:
+        tb, ob = _run_arrays(df, condition, "baseline")
+        tv, ov = _run_arrays(df, condition, "vgs")
+        if tb.shape != tv.shape or not tb.size:
+            continue
+        row: dict[str, Any] = {"condition": condition, "runs": tb.shape[0],
+                               "scenes": tb.shape[1]}
+        arrays = {"baseline": (tb, ob), "vgs": (tv, ov)}
+        centre = center_of(df, condition, center)
+        if centre is not None and len(centre) == tb.shape[1]:
+            arrays["center"] = tuple(a[None, :] for a in time_arrays(centre))
+        for policy, (t, ok) in arrays.items():
+            value, low, high = iqm_interval(t, ok)
+            row.update({f"iqm_s_{policy}": value, f"iqm_s_{policy}_ci_low": low,
+                        f"iqm_s_{policy}_ci_high": high})
+        for other in ("baseline", "center"):
+            if other not in arrays:
+                continue
+            to, oo = arrays[other]
+            wins = np.array([win_matrix(tv[r], ov[r], to[min(r, len(to) - 1)],
+                                        oo[min(r, len(oo) - 1)]) for r in range(len(tv))])
+            value, low, high = improvement_probability(wins)
+            row.update({f"p_faster_than_{other}": value, f"p_faster_than_{other}_ci_low": low,
+                        f"p_faster_than_{other}_ci_high": high})
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def field_rows(field: pd.DataFrame) -> tuple[list[str], list[list[str]]]:
+    """The header and rows of :func:`field_table` as text."""
+    def cell(row: pd.Series, key: str, digits: int) -> str:
+        value = row.get(key, math.nan)
+        if not isinstance(value, float) or not math.isfinite(value):
+            return "n/a"
+        low, high = row[f"{key}_ci_low"], row[f"{key}_ci_high"]
+        return f"{value:.{digits}f} [{low:.{digits}f}, {high:.{digits}f}]"
+
+    header = ["condition", "runs x scenes", "IQM of times [s], baseline", "VGS", "centre",
+              "P(VGS faster than the baseline)", "P(VGS faster than the centre)"]
+    rows = [[str(r["condition"]), f"{r['runs']} x {r['scenes']}",
+             cell(r, "iqm_s_baseline", 1), cell(r, "iqm_s_vgs", 1), cell(r, "iqm_s_center", 1),
+             cell(r, "p_faster_than_baseline", 3), cell(r, "p_faster_than_center", 3)]
+            for _, r in field.iterrows()]
+    return header, rows
+
+
+def plot_profile(df: pd.DataFrame, path: Path, center: pd.DataFrame | None = None) -> Path:
+    """Performance profiles: per condition, the fraction of tests assembled within ``t``
+    seconds against ``t``, per policy (its runs pooled; thin lines: each run), the centre
+    heuristic included when given. A curve that lies higher and further left is better; its
+    right end is the policy's success rate."""
+    conditions = [c for c in CONDITIONS if c in set(df["condition"])]
+    fig, axes = plt.subplots(1, len(conditions), figsize=(4.4 * len(conditions), 3.6),
+                             sharey=True, squeeze=False)
+    for ax, condition in zip(axes[0], conditions, strict=True):
+        curves = {p: _run_arrays(df, condition, p) for p in LEARNED}
+        centre = center_of(df, condition, center)
+        if centre is not None:
+            curves["center"] = tuple(a[None, :] for a in time_arrays(centre))
+        finite = np.concatenate([np.where(ok, t, np.nan).ravel()
+                                 for t, ok in curves.values()])
+        grid = np.linspace(0.0, float(np.nanmax(finite)) if np.isfinite(finite).any() else 1.0,
+                           400)
+        for policy, (t, ok) in curves.items():
+            done = np.where(ok, t, np.inf)
+            fraction = (done[..., None] <= grid).mean(axis=1)  # runs x grid
+            if fraction.shape[0] > 1:
+                for f in fraction:
+                    ax.plot(grid, f, color=policy_color(policy), lw=0.6, alpha=0.35)
+            ax.plot(grid, fraction.mean(axis=0), color=policy_color(policy), lw=1.8,
+                    label=f"{policy} ({fraction.shape[0]} run{'s' if len(fraction) > 1 else ''})")
+        ax.set_title(CONDITION_TITLES.get(condition, condition), fontsize=9)
+        ax.set_xlabel("t [s, simulated]")
+        ax.grid(alpha=0.3)
+    axes[0][0].set_ylabel("fraction of tests assembled within t")
+    axes[0][0].legend(fontsize=8, loc="lower right")
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def seeds_report(folders: list[Path], dest: Path, center: Path | None = None) -> Path:
+    """Write ``dest/seeds.md``, ``seeds.csv``, ``field.csv``, ``seeds.png`` and
+    ``profile.png``; return the Markdown's path. ``center``: a results folder with the centre
+    heuristic's tests on the same scenes (:func:`vgs.analysis.makeup.load_center`).
+
+    Raises:
+        ConfigError: On the folders (:func:`load_seeds`) or the centre's folder.
+    """
+    df = load_seeds(folders)
+    centre = load_center(center, df) if center is not None else None
+    table = seeds_table(df)
+    field = field_table(df, centre)
     dest.mkdir(parents=True, exist_ok=True)
     rounded(table).to_csv(dest / "seeds.csv", index=False)  # times to the ms
+    field.to_csv(dest / "field.csv", index=False, float_format="%.4f")
     plot_seeds(table, dest / "seeds.png")
+    plot_profile(df, dest / "profile.png", centre)
+    command = ("vgs seeds " + " ".join(str(f) for f in folders) + f" --out {dest}"
+               + (f" --center {center}" if center is not None else ""))
+    doc = Doc(dest)
+    doc.h(2, "Across runs, the field's statistics")
+    doc.p(f"Made by `{command}`. Interquartile mean (IQM) of the successes' assembly times, "
+          "pooled over runs and scenes; P(VGS faster): the chance that on a random test scene "
+          "of a random training run VGS assembled faster (a failed test is slower than any "
+          "success, two failures tie: 1/2); 95 % intervals from the crossed bootstrap over "
+          "runs and scenes (NumPy; `field.csv`).")
+    doc.table(*field_rows(field))
+    doc.img(dest / "profile.png", "Performance profile: the fraction of tests assembled "
+                                  "within t seconds, per policy (thin lines: each run)")
+    parts = makeups(df, centre)
+    write_makeup(doc, parts, command)
+    write_regret(doc, parts, command)
     path = dest / "seeds.md"
-    path.write_text(seeds_markdown(table, folders, dest, "seeds.png"))
+    path.write_text(seeds_markdown(table, folders, dest, "seeds.png", center) + "\n"
+                    + doc.markdown())
     return path

@@ -36,6 +36,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from vgs.errors import ConfigError
+
 
 def sample_std(values: Sequence[float] | np.ndarray) -> float:
     """Standard deviation with divisor n - 1; NaN for fewer than two values."""
@@ -226,3 +228,354 @@ def summarize(df: pd.DataFrame) -> dict[str, Any]:
                             df.loc[~df["assembly_success"].astype(bool), "failure_reason"]
                             .value_counts().items()},
     }
+
+
+# -- what a gap is made of: phases, grasp sites, failed attempts ---------------------------------
+#
+# Every decomposition below is exact: its rows sum to the quantity they split (up to float).
+
+PHASE_PREFIX, PHASE_SUFFIX = "time_", "_s"
+# |grasp_offset_mm| sites along the axis and across_mm sites across it (issue 52).
+ALONG_SITE_EDGES_MM = (26.0, 35.0)
+ALONG_SITES = ("within +-26 mm", "26-35 mm", "beyond 35 mm")
+ACROSS_SITE_MM = 5.0
+ACROSS_SITES = ("within 5 mm of the axis", "5 mm or more beside it")
+NO_GRASP = "no grasp"
+
+
+def phase_columns(df: pd.DataFrame) -> list[str]:
+    """The ``time_<phase>_s`` columns of a table, in the table's (the phases') order."""
+    return [c for c in df.columns if c.startswith(PHASE_PREFIX) and c.endswith(PHASE_SUFFIX)
+            and c != "assembly_time_s"]
+
+
+def phase_gap(base: pd.DataFrame, vgs: pd.DataFrame) -> dict[str, float]:
+    """The gap in the mean time of successes, ``M_b - M_v``, split by phase [s]:
+
+        M_b - M_v = sum_p (mean_b(t_p) - mean_v(t_p)),
+
+    each mean over the policy's own successes; exact because every success's assembly time is
+    the sum of its phase times (a row ``other`` takes what the phases do not hold, zero in
+    the tables written so far). Keys: the phase names, ``other`` and ``gap``.
+    """
+    ob = base["assembly_success"].to_numpy(bool)
+    ov = vgs["assembly_success"].to_numpy(bool)
+    if not ob.any() or not ov.any():
+        return {}
+    gap = float(base["assembly_time_s"].to_numpy(float)[ob].mean()
+                - vgs["assembly_time_s"].to_numpy(float)[ov].mean())
+    out: dict[str, float] = {}
+    for col in phase_columns(base):
+        if col in vgs.columns:
+            out[col[len(PHASE_PREFIX):-len(PHASE_SUFFIX)]] = float(
+                base[col].to_numpy(float)[ob].mean() - vgs[col].to_numpy(float)[ov].mean())
+    out["other"] = gap - sum(out.values())
+    out["gap"] = gap
+    return out
+
+
+def phase_variance_shares(df: pd.DataFrame) -> dict[str, float]:
+    """Each phase's share of the variance of the successes' assembly time,
+
+        cov(t_phase, T) / var(T),   T = sum_p t_p,
+
+    over the successes; the shares sum to 1 (a phase that varies with the total carries its
+    part). Empty for fewer than two successes or no variance."""
+    ok = df["assembly_success"].to_numpy(bool)
+    total = df["assembly_time_s"].to_numpy(float)[ok]
+    if total.size < 2 or np.var(total) == 0:
+        return {}
+    centred = total - total.mean()
+    return {c[len(PHASE_PREFIX):-len(PHASE_SUFFIX)]: float(
+        np.mean((df[c].to_numpy(float)[ok] - df[c].to_numpy(float)[ok].mean()) * centred)
+        / np.var(total)) for c in phase_columns(df)}
+
+
+def along_sites(offset_mm: np.ndarray | pd.Series) -> np.ndarray:
+    """Each grasp's site along the axis (:data:`ALONG_SITES` by ``|grasp_offset_mm|``, the
+    edges belonging to the outer site; :data:`NO_GRASP` for NaN)."""
+    a = np.abs(np.asarray(offset_mm, dtype=float))
+    out = np.full(a.shape, NO_GRASP, dtype=object)
+    lo, hi = ALONG_SITE_EDGES_MM
+    out[a < lo] = ALONG_SITES[0]
+    out[(a >= lo) & (a < hi)] = ALONG_SITES[1]
+    out[a >= hi] = ALONG_SITES[2]
+    return out
+
+
+def across_sites(df: pd.DataFrame) -> np.ndarray | None:
+    """Each grasp's site across the axis (:data:`ACROSS_SITES` by ``|across_mm|``; signed or
+    not, its magnitude), or None when the table does not hold ``across_mm`` (tables written
+    before it was recorded) or holds no value in it."""
+    if "across_mm" not in df.columns or not df["across_mm"].notna().any():
+        return None
+    a = np.abs(df["across_mm"].to_numpy(float))
+    out = np.full(a.shape, NO_GRASP, dtype=object)
+    out[a < ACROSS_SITE_MM] = ACROSS_SITES[0]
+    out[a >= ACROSS_SITE_MM] = ACROSS_SITES[1]
+    return out
+
+
+@dataclass(frozen=True)
+class SitePart:
+    """One grasp site's part of the gap ``M_b - M_v`` in the mean time of successes.
+
+    ``w`` is the share of a policy's successes that grasped in the site, ``m`` their mean
+    time, ``M = (M_b + M_v) / 2``. The site's part is ``mix + rate`` with
+
+        mix  = (w_b - w_v) ((m_b + m_v) / 2 - M)   the policies' different use of the site
+        rate = (w_b + w_v) / 2 (m_b - m_v)         their different speed in it
+
+    (a site where one policy has no success: ``rate = 0`` and the other's ``m`` in ``mix``).
+    Since ``M_P = sum_k w_Pk m_Pk`` and ``sum_k (w_bk - w_vk) = 0``, the parts of all sites sum
+    to ``M_b - M_v`` exactly.
+    """
+
+    site: str
+    share_baseline: float
+    share_vgs: float
+    mean_baseline_s: float
+    mean_vgs_s: float
+    mix_s: float
+    rate_s: float
+
+    @property
+    def part_s(self) -> float:
+        return self.mix_s + self.rate_s
+
+
+def site_gap(base_sites: np.ndarray, base: pd.DataFrame, vgs_sites: np.ndarray,
+             vgs: pd.DataFrame, sites: Sequence[str]) -> list[SitePart]:
+    """:class:`SitePart` of each site of ``sites`` (the sites of every success must be among
+    them); empty when either policy has no success."""
+    ob = base["assembly_success"].to_numpy(bool)
+    ov = vgs["assembly_success"].to_numpy(bool)
+    if not ob.any() or not ov.any():
+        return []
+    tb = base["assembly_time_s"].to_numpy(float)[ob]
+    tv = vgs["assembly_time_s"].to_numpy(float)[ov]
+    sb, sv = np.asarray(base_sites)[ob], np.asarray(vgs_sites)[ov]
+    grand = 0.5 * (tb.mean() + tv.mean())
+    parts = []
+    for site in sites:
+        ib, iv = sb == site, sv == site
+        wb, wv = float(ib.mean()), float(iv.mean())
+        mb = float(tb[ib].mean()) if ib.any() else math.nan
+        mv = float(tv[iv].mean()) if iv.any() else math.nan
+        if ib.any() and iv.any():
+            mix, rate = (wb - wv) * (0.5 * (mb + mv) - grand), 0.5 * (wb + wv) * (mb - mv)
+        else:
+            mix, rate = (wb - wv) * ((mb if ib.any() else mv if iv.any() else 0.0) - grand), 0.0
+        parts.append(SitePart(site, wb, wv, mb, mv, float(mix), float(rate)))
+    return parts
+
+
+def failed_share_pct(tb: np.ndarray, ob: np.ndarray, tv: np.ndarray, ov: np.ndarray) -> float:
+    """The failed attempts' share of the gain in total time [%]:
+
+        100 (F_b - F_v) / (S_b - S_v),
+
+    ``S`` the summed assembly times of all attempts (:func:`total_gain_pct`), ``F`` those of
+    the failed ones (until given up; a missed grasp costs none). NaN when ``S_b = S_v``.
+    """
+    sb, sv = float(np.nansum(tb)), float(np.nansum(tv))
+    fb, fv = float(np.nansum(tb[~ob])), float(np.nansum(tv[~ov]))
+    return 100.0 * (fb - fv) / (sb - sv) if sb != sv else math.nan
+
+
+def both_within(base: pd.DataFrame, other: pd.DataFrame, limit_mm: float = ALONG_SITE_EDGES_MM[0]
+                ) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Copies of two tables of the same scenes (sorted by ``index``) in which only the scenes
+    where both policies grasped within ``+-limit_mm`` along the axis keep their successes: a
+    gain on them (:func:`efficiency_gain`) is the gain restricted to those scenes, and its
+    paired bootstrap resamples all scenes, so the number of such scenes varies as it should."""
+    base, other = base.sort_values("index").copy(), other.sort_values("index").copy()
+    keep = ((np.abs(base["grasp_offset_mm"].to_numpy(float)) < limit_mm)
+            & (np.abs(other["grasp_offset_mm"].to_numpy(float)) < limit_mm))
+    for t in (base, other):
+        t["assembly_success"] = t["assembly_success"].to_numpy(bool) & keep
+    return base, other
+
+
+# -- regret against the centre heuristic ---------------------------------------------------------
+
+REGRET_PARTS = ("re-searches", "flank pixels", "along-axis offset")
+
+
+@dataclass(frozen=True)
+class Regret:
+    """VGS's regret against the centre heuristic on the same scenes.
+
+    On the ``n`` scenes both assembled, ``d_i = t_vgs,i - t_centre,i`` and the regret
+    ``R = (1/n) sum_i d_i`` [s]. Its parts split those scenes into three disjoint classes and
+    give each ``(1/n) sum_{i in class} d_i``, so they sum to ``R``:
+
+    * re-searches: VGS made more new searches than the centre (``retries``);
+    * flank pixels: the others where VGS's pixel lay ``ACROSS_SITE_MM`` or more beside the
+      axis (``|across_mm|``; None when the table does not hold it);
+    * along-axis offset: the rest, VGS's pixel on the axis and no extra search: what its
+      offset along the axis costs (plus the scenes' noise). Without ``across_mm`` it holds the
+      flank pixels' scenes too.
+
+    Intervals: percentile, paired bootstrap over the scenes both assembled. ``total_pct``:
+    ``100 (S_vgs - S_centre) / S_centre`` on the total time of all tests, minus the gain of
+    :func:`efficiency_gain` with its paired-bootstrap interval. ``parts`` maps each part to
+    ``(value, low, high, scenes)``.
+    """
+
+    n: int
+    mean_s: float
+    low: float
+    high: float
+    parts: dict[str, tuple[float, float, float, int] | None]
+    total_pct: Gain
+    failures_vgs: int
+    failures_center: int
+
+
+def regret(center: pd.DataFrame, vgs: pd.DataFrame, resamples: int = BOOTSTRAP_RESAMPLES,
+           seed: int = 0) -> Regret:
+    """:class:`Regret` of ``vgs`` against ``center``, two tables of the same scenes."""
+    c, v = center.sort_values("index"), vgs.sort_values("index")
+    # The gain of VGS over the centre in total time, 100 (S_c - S_v) / S_c, is minus the regret.
+    g = efficiency_gain(c, v, measure=TOTAL_GAIN, resamples=resamples, seed=seed)
+    t_pct = Gain(-g.value, -g.high, -g.low, g.paired, g.n)
+    tc, oc = time_arrays(c)
+    tv, ov = time_arrays(v)
+    both = oc & ov
+    fails = int((~ov).sum()), int((~oc).sum())
+    if not both.any():
+        return Regret(0, math.nan, math.nan, math.nan, {}, t_pct, *fails)
+    d = (tv - tc)[both]
+    research = (v["retries"].to_numpy(float) > c["retries"].to_numpy(float))[both]
+    sites = across_sites(v)
+    flank = (None if sites is None else (sites == ACROSS_SITES[1])[both] & ~research)
+    along = ~research if flank is None else ~research & ~flank
+    masks = {"re-searches": research, "flank pixels": flank, "along-axis offset": along}
+    # Fewer than MIN_SUCCESSES scenes both assembled: the values without intervals.
+    rng = np.random.default_rng(seed)
+    idx = (rng.integers(d.size, size=(resamples, d.size)) if d.size >= MIN_SUCCESSES
+           else None)
+
+    def interval(x: np.ndarray) -> tuple[float, float]:
+        if idx is None:
+            return math.nan, math.nan
+        lo, hi = np.percentile(x[idx].mean(axis=1), [2.5, 97.5])
+        return float(lo), float(hi)
+
+    parts: dict[str, tuple[float, float, float, int] | None] = {}
+    for name, mask in masks.items():
+        if mask is None:
+            parts[name] = None
+            continue
+        dm = np.where(mask, d, 0.0)
+        parts[name] = (float(dm.mean()), *interval(dm), int(mask.sum()))
+    return Regret(int(d.size), float(d.mean()), *interval(d), parts, t_pct, *fails)
+
+
+# -- across training runs: the crossed bootstrap and the field's statistics ---------------------
+
+
+def crossed_interval(stat: Callable[[np.ndarray, np.ndarray], float], runs: int, scenes: int,
+                     resamples: int = BOOTSTRAP_RESAMPLES, seed: int = 0
+                     ) -> tuple[float, float]:
+    """Percentile 95 % interval of ``stat(drawn runs, drawn scenes)`` under the crossed
+    bootstrap of ``vgs seeds``: each replicate draws ``runs`` training runs with replacement
+    and **one** set of ``scenes`` test scenes with replacement, shared by every drawn run (runs
+    and scenes are crossed factors: every run met the same scenes). NaN replicates are dropped.
+    """
+    rng = np.random.default_rng(seed)
+    out = np.empty(resamples)
+    for b in range(resamples):
+        r = rng.integers(runs, size=runs)
+        i = rng.integers(scenes, size=scenes)
+        out[b] = stat(r, i)
+    out = out[np.isfinite(out)]
+    if not out.size:
+        return math.nan, math.nan
+    low, high = np.percentile(out, [2.5, 97.5])
+    return float(low), float(high)
+
+
+def iqm(values: np.ndarray) -> float:
+    """Interquartile mean: the mean of the values left when ``floor(n / 4)`` are cut from each
+    end of the sorted values (``scipy.stats.trim_mean(x, 0.25)``, the measure of Agarwal et
+    al. 2021); NaN without values."""
+    x = np.sort(np.asarray(values, dtype=float).ravel())
+    x = x[np.isfinite(x)]
+    if not x.size:
+        return math.nan
+    cut = int(0.25 * x.size)
+    return float(x[cut:x.size - cut].mean())
+
+
+def win_matrix(tv: np.ndarray, ov: np.ndarray, to: np.ndarray, oo: np.ndarray) -> np.ndarray:
+    """Per scene, 1 where VGS assembled faster than the other policy, 1/2 on a tie and 0
+    otherwise; a failed test is slower than any success, two failures tie."""
+    a = np.where(ov, tv, np.inf)
+    b = np.where(oo, to, np.inf)
+    return np.where(a < b, 1.0, np.where(a == b, 0.5, 0.0))
+
+
+def improvement_probability(wins: np.ndarray, resamples: int = BOOTSTRAP_RESAMPLES,
+                            seed: int = 0) -> tuple[float, float, float]:
+    """``P(VGS faster)`` on a random paired scene of a random training run, the mean of
+    ``wins`` (runs x scenes, :func:`win_matrix`), with the crossed-bootstrap 95 % interval."""
+    wins = np.atleast_2d(np.asarray(wins, dtype=float))
+    low, high = crossed_interval(lambda r, i: float(wins[np.ix_(r, i)].mean()), *wins.shape,
+                                 resamples=resamples, seed=seed)
+    return float(wins.mean()), low, high
+
+
+def iqm_interval(times: np.ndarray, ok: np.ndarray, resamples: int = BOOTSTRAP_RESAMPLES,
+                 seed: int = 0) -> tuple[float, float, float]:
+    """IQM of the assembly times of the successes pooled over training runs (``times`` and
+    ``ok``: runs x scenes), with the crossed-bootstrap 95 % interval."""
+    times = np.atleast_2d(np.asarray(times, dtype=float))
+    ok = np.atleast_2d(np.asarray(ok, dtype=bool))
+    t = np.where(ok, times, np.nan)
+    low, high = crossed_interval(lambda r, i: iqm(t[np.ix_(r, i)]), *t.shape,
+                                 resamples=resamples, seed=seed)
+    return iqm(t), low, high
+
+
+def mean_gain(pairs: list[tuple[pd.DataFrame, pd.DataFrame]],
+              resamples: int = BOOTSTRAP_RESAMPLES, seed: int = 0,
+              measure: Measure = MEAN_GAIN) -> tuple[float, float, float]:
+    """Mean over training runs of the gain, with the crossed bootstrap's 95 % interval
+    (:func:`crossed_interval`: runs and one shared draw of test scenes per replicate).
+
+    Args:
+        pairs: ``(baseline table, VGS table)`` of each training run, on the same test scenes
+            (the same episode indices).
+        resamples: Bootstrap resamples.
+        seed: Seed of the resampling.
+        measure: The gain of one run on given scenes: ``MEAN_GAIN`` (mean of the successes)
+            or ``TOTAL_GAIN`` (total time of all attempts), :mod:`vgs.analysis.stats`.
+
+    Returns:
+        ``(mean gain, low, high)`` in percent; the interval is NaN when a run has fewer than
+        ``measure.min_successes`` successes for either policy.
+
+    Raises:
+        ConfigError: If the tables do not hold the same episode indices.
+    """
+    indices = {tuple(np.sort(t["index"].to_numpy())) for pair in pairs for t in pair}
+    if len(indices) > 1:
+        raise ConfigError("seeds", "the training runs' tables do not hold the same test "
+                                   "episodes; the crossed bootstrap needs shared scenes")
+    if any(measure.column not in t.columns for pair in pairs for t in pair):
+        return math.nan, math.nan, math.nan  # tables written without that column
+    arrays = [(*time_arrays(b, measure.column), *time_arrays(v, measure.column))
+              for b, v in pairs]
+    gains = [measure(*a) for a in arrays]
+    value = float(np.mean(gains)) if gains else math.nan
+    if (not math.isfinite(value)
+            or min(min(a[1].sum(), a[3].sum()) for a in arrays) < measure.min_successes):
+        return value, math.nan, math.nan
+
+    def stat(runs: np.ndarray, i: np.ndarray) -> float:
+        return sum(measure(*(x[i] for x in arrays[s])) for s in runs) / len(arrays)
+
+    low, high = crossed_interval(stat, len(arrays), len(arrays[0][0]), resamples, seed)
+    return value, low, high

@@ -87,25 +87,45 @@ def _mean_std(ax: Axes, summary: Sequence[dict[str, Any]], key: str, color: str,
     ax.errorbar(x, mean, yerr=std, color=color, marker="o", capsize=3, label=label)
 
 
+def moment_unit(values: np.ndarray) -> tuple[float, str]:
+    """``(factor, unit)`` that shows moments in N m ``values`` with a maximum of 1 to 1000:
+    N m, mN m, uN m or nN m."""
+    peak = float(np.max(np.abs(values))) if np.size(values) else 0.0
+    for factor, unit in ((1.0, "N m"), (1e3, "mN m"), (1e6, "uN m")):
+        if peak * factor >= 1.0:
+            return factor, unit
+    return 1e9, "nN m"
+
+
 def _moment_axis(ax: Axes, cfg: ExperimentConfig, offsets: np.ndarray) -> None:
-    """M_G and M_I of the nominal peg on a second y axis (M_I scaled to be visible)."""
+    """M_G and M_I of the nominal peg, each on its own y axis in the unit that fits it (M_I is
+    about a thousandth of M_G: on one axis it would be a flat line)."""
     lever = np.linspace(offsets.min(), offsets.max(), 200) / 1000.0
     if np.ptp(lever) == 0:
         lever = np.linspace(-0.035, 0.035, 200)
     m_g, m_i = disturbing_moments(cfg, lever)
-    scale = 10.0 ** max(0, round(math.log10(m_g.max() / m_i.max()))) if m_i.max() > 0 else 1.0
     a = cfg.assembly
     twin = ax.twinx()
-    twin.plot(1000 * lever, 1000 * m_g, "C3-", lw=1.2,
-              label=f"M_G = m g |l| sin(beta), beta = {a.search_tilt_deg:g} deg (search tilt)")
-    twin.plot(1000 * lever, 1000 * scale * m_i, "C1--", lw=1.2,
-              label=f"M_I x {scale:g} = (1/2) m l^2 (2 pi / T)^2 A, sinusoidal wiggle "
-                    f"A = {a.wiggle_amplitude_deg:g} deg, T = {a.wiggle_period:g} s")
-    twin.set_ylabel(f"disturbing moment [mN m], m = {cfg.cell.peg.mass:g} kg")
+    f_g, u_g = moment_unit(m_g)
+    twin.plot(1000 * lever, f_g * m_g, "C3-", lw=1.2,
+              label=f"M_G [{u_g}] = m g |l| sin(beta), beta = {a.search_tilt_deg:g} deg "
+                    "(search tilt)")
+    twin.set_ylabel(f"M_G [{u_g}] (solid), m = {cfg.cell.peg.mass:g} kg")
     twin.set_ylim(bottom=0)
+    third = ax.twinx()
+    third.spines.right.set_position(("axes", 1.14))
+    f_i, u_i = moment_unit(m_i)
+    third.plot(1000 * lever, f_i * m_i, "C1--", lw=1.2,
+               label=f"M_I [{u_i}] = (1/2) m l^2 (2 pi / T)^2 A, sinusoidal wiggle "
+                     f"A = {a.wiggle_amplitude_deg:g} deg, T = {a.wiggle_period:g} s")
+    third.set_ylabel(f"M_I [{u_i}] (outer right axis, dashed)")
+    third.set_ylim(bottom=0)
     lines = ax.get_legend_handles_labels()
-    moments = twin.get_legend_handles_labels()
-    ax.legend(lines[0] + moments[0], lines[1] + moments[1], fontsize=7, loc="upper center")
+    handles, labels = lines
+    for axis in (twin, third):
+        h, lab = axis.get_legend_handles_labels()
+        handles, labels = handles + h, labels + lab
+    ax.legend(handles, labels, fontsize=7, loc="upper center")
 
 
 def disturbing_moments(cfg: ExperimentConfig, lever: np.ndarray,

@@ -52,9 +52,12 @@ def cmd_curves(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
           f"{'|l| [mm]':>8} {'reward':>6}")
     for label, phases in summaries.items():
         for phase, s in phases.items():
+            assembly = (f"{'skipped':>8} {'-':>7}" if s["assembly_skipped"] else
+                        f"{s['assembly_success']:>8.2f} {s['assembly_time_mean_s']:>7.1f}")
+            stops = (f"  ({s['threshold_stops']} assemblies stopped at the threshold)"
+                     if s["threshold_stops"] else "")
             print(f"{label:<28} {phase:<12} {s['episodes']:>4} {s['grasp_success']:>6.2f} "
-                  f"{s['assembly_success']:>8.2f} {s['assembly_time_mean_s']:>7.1f} "
-                  f"{s['abs_offset_mean_mm']:>8.1f} {s['reward_mean']:>6.3f}")
+                  f"{assembly} {s['abs_offset_mean_mm']:>8.1f} {s['reward_mean']:>6.3f}{stops}")
     print(f"wrote {args.out}")
     return 0
 
@@ -63,7 +66,8 @@ def cmd_report(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     """Build DIR/report.md and DIR/report.html from the results in DIR."""
     from vgs.analysis.report import build_report
 
-    path = build_report(Path(args.dir), **({"title": args.title} if args.title else {}))
+    path = build_report(Path(args.dir), **({"title": args.title} if args.title else {}),
+                        center=Path(args.center) if args.center else None)
     print(f"wrote {path} and {path.with_suffix('.html')}")
     if args.publish:
         from vgs.tools.publish import publish
@@ -82,9 +86,11 @@ def cmd_seeds(args: argparse.Namespace, cfg: ExperimentConfig | None) -> int:
     """Compare VGS with the baseline across the training runs of several results folders."""
     from vgs.analysis.seeds import seeds_report
 
-    path = seeds_report([Path(d) for d in args.dirs], Path(args.out))
+    path = seeds_report([Path(d) for d in args.dirs], Path(args.out),
+                        center=Path(args.center) if args.center else None)
     print(path.read_text().split("![", 1)[0].rstrip())
-    print(f"\nwrote {path}, {path.with_suffix('.csv')} and {path.with_suffix('.png')}")
+    print(f"\nwrote {path}, {path.with_suffix('.csv')}, {path.with_suffix('.png')} and "
+          f"{path.with_name('profile.png')}")
     return 0
 
 

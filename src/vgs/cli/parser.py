@@ -305,6 +305,10 @@ def _add_report(sub: Any) -> None:
                              "checkpoints) and each finished run's final network "
                              "(DEST/<mode>/policy.pt) to DEST, e.g. docs/results/quick")
     report.add_argument("--title", help="the report's title (default: VGS reproduction report)")
+    report.add_argument("--center", metavar="DIR",
+                        help="a results folder with the centre heuristic's tests on the same "
+                             "scenes (e.g. docs/results/paper_center_stiction), for VGS's regret "
+                             "against it when DIR has none")
     report.set_defaults(func=cmd_report)
 
 
@@ -316,7 +320,11 @@ def _add_seeds(sub: Any) -> None:
                        help="reproduce folders or their published copies (docs/results/...), "
                             "each with eval/<policy>/<condition>/episodes.parquet")
     seeds.add_argument("--out", required=True,
-                       help="folder of seeds.md, seeds.csv and seeds.png")
+                       help="folder of seeds.md, seeds.csv, seeds.png and profile.png")
+    seeds.add_argument("--center", metavar="DIR",
+                       help="a results folder with the centre heuristic's tests on the same "
+                            "scenes (e.g. docs/results/paper_center_stiction): VGS's regret "
+                            "against it, P(VGS faster than the centre), its performance profile")
     seeds.set_defaults(func=cmd_seeds)
 
 

@@ -247,3 +247,15 @@ def provenance() -> dict[str, str]:
 
     return {"vgs_version": version("vgs"), "source_revision": source_revision(),
             "mujoco_version": version("mujoco"), "torch_version": version("torch")}
+
+
+def duration_text(seconds: float) -> str:
+    """A duration in the unit that fits it: ``7.5 s``, ``42 s``, ``12.3 min``, ``2.41 h``
+    (never ``0.0 h`` for seconds)."""
+    if seconds < 10:
+        return f"{seconds:.1f} s"
+    if seconds < 120:
+        return f"{seconds:.0f} s"
+    if seconds < 7200:
+        return f"{seconds / 60:.1f} min"
+    return f"{seconds / 3600:.2f} h"

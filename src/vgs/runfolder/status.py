@@ -25,7 +25,7 @@ from vgs import checkpoint
 from vgs.columns import as_bool
 from vgs.config import ExperimentConfig, from_dict
 from vgs.errors import ConfigError, CorruptFileError
-from vgs.runfolder.common import engine_note, hosts_of, read_json, short_revision
+from vgs.runfolder.common import duration_text, engine_note, hosts_of, read_json, short_revision
 from vgs.runfolder.journal import read_journal
 from vgs.runfolder.layout import eval_jobs, train_runs
 
@@ -73,18 +73,15 @@ class Progress:
         parts = [f"{self.name:<34} {self.done:>5}/{self.total:<5} {state}"]
         if self.seconds_per_episode is not None and not self.finished:
             parts.append(f"{self.seconds_per_episode:.1f} s/episode, "
-                         f"{self.remaining_h:.1f} h left at that rate")
+                         f"{duration_text(3600.0 * (self.remaining_h or 0.0))} left at that "
+                         "rate")
         text = "; ".join(parts)
         return f"{text}\n    {self.note}" if self.note and not self.finished else (
             f"{text}; {self.note}" if self.note else text)
 
 
 def _ago(seconds: float) -> str:
-    if seconds < 120:
-        return f"{seconds:.0f} s"
-    if seconds < 7200:
-        return f"{seconds / 60:.0f} min"
-    return f"{seconds / 3600:.1f} h"
+    return duration_text(seconds)
 
 
 def _age(*paths: Path) -> float | None:
@@ -266,7 +263,8 @@ def format_status(path: Path) -> str:
     lines = [f"{path}"]
     if (path / "reproduce.json").exists():
         meta = read_json(path / "reproduce.json")
-        walls = ", ".join(f"{k} {v / 3600:.2f} h" for k, v in meta.get("stage_wall_s", {}).items())
+        walls = ", ".join(f"{k} {duration_text(v)}"
+                          for k, v in meta.get("stage_wall_s", {}).items())
         lines[0] += (f": {meta.get('profile')} profile, source "
                      f"{short_revision(meta.get('git_revision'))}")
         if walls:

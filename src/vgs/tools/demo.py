@@ -235,11 +235,12 @@ def policy_panel(result: DemoResult, size: int, half: float = 0.08) -> np.ndarra
     if result.q_map is not None:
         ax.imshow(hm.color, origin="lower", extent=ext)
         q = np.ma.masked_where(hm.depth <= 0.005, result.q_map)  # the pixels it chose among
-        ax.imshow(q, origin="lower", extent=ext, cmap="inferno", alpha=0.85)
-        title = f"{result.policy}: Q map on the peg, grasp"
+        im = ax.imshow(q, origin="lower", extent=ext, cmap="inferno", alpha=0.85)
+        fig.colorbar(im, ax=ax, fraction=0.046, pad=0.02).ax.tick_params(labelsize=6)
+        title = f"{Path(str(result.policy)).name}: Q on the peg, grasp"
     else:
         ax.imshow(1000 * hm.depth, origin="lower", extent=ext, cmap="viridis")
-        title = f"{result.policy}: depth heightmap, grasp"
+        title = f"{Path(str(result.policy)).name}: depth heightmap, grasp"
     along = np.array([math.cos(c.yaw), math.sin(c.yaw)])
     across = np.array([-along[1], along[0]])
     for side in (-1.0, 1.0):
