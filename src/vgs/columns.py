@@ -2,8 +2,9 @@
 
 One name means one quantity in one unit wherever it appears: the evaluation tables
 (``episodes.parquet``, ``episodes.csv``) and their ``journal.jsonl``, training's
-``episodes.csv``, the sweep's ``sweep.csv`` and its ``journal.jsonl``. A name carries its unit
-as a suffix (``_s``, ``_h``, ``_mm``, ``_kg``, ``_nm`` for N m, ``_deg``, ``_pct``);
+``episodes.csv``, the sweep's ``sweep.csv`` and its ``journal.jsonl``; an episode's per-tick
+trace (:data:`TRACE_COLUMNS`, :mod:`vgs.tools.trace`). A name carries its unit as a suffix
+(``_s``, ``_h``, ``_mm``, ``_kg``, ``_n`` for N, ``_nm`` for N m, ``_deg``, ``_pct``);
 booleans are stored as booleans. :data:`COLUMNS` gives each name its unit, kind and a one-line
 description; parquet files carry the unit and the description in each field's metadata
 (:func:`write_parquet`). The summary tables built from them (the report's ``results.csv``,
@@ -24,8 +25,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-UNIT_SUFFIXES: dict[str, str] = {"s": "_s", "h": "_h", "mm": "_mm", "kg": "_kg", "N m": "_nm",
-                                 "deg": "_deg", "%": "_pct"}
+UNIT_SUFFIXES: dict[str, str] = {"s": "_s", "h": "_h", "mm": "_mm", "kg": "_kg", "N": "_n",
+                                 "N m": "_nm", "deg": "_deg", "%": "_pct"}
 KINDS = ("bool", "int", "float", "str")
 
 
@@ -192,6 +193,32 @@ SUMMARY_COLUMNS: dict[str, Column] = {
                                                          "failed attempts included")))},
 }
 
+# The UR5's joints in the order of the arm's qpos (vgs.sim.ur5.JOINT_NAMES, held by a test).
+ARM_JOINTS = ("shoulder_pan", "shoulder_lift", "elbow", "wrist_1", "wrist_2", "wrist_3")
+_GT = "ground truth, analysis only: "
+# An episode's per-tick trace (vgs demo --trace, vgs evaluate --traces): one row per control
+# tick, world frame (x, y on the table, z up from its top).
+TRACE_COLUMNS: dict[str, Column] = {
+    "time_s": Column("s", "float", "simulated time at the end of the control tick"),
+    "phase": Column("", "str", "the robot's phase during the tick: idle, grasp, the assembly's "
+                               "phases (time_<phase>_s sums their ticks), release"),
+    **{f"tcp_{a}_mm": Column("mm", "float", f"TCP position, world {a}") for a in "xyz"},
+    **{f"tcp_q{a}": Column("", "float", f"TCP orientation in the world, unit quaternion "
+                                        f"(w, x, y, z; w >= 0): {a}") for a in "wxyz"},
+    **{f"force_{a}_n": Column("N", "float", f"tared F/T force at the TCP, world {a} (what the "
+                                            "controller reads)") for a in "xyz"},
+    **{f"torque_{a}_nm": Column("N m", "float", f"tared F/T moment at the TCP, world {a}")
+       for a in "xyz"},
+    **{f"joint_{j}_deg": Column("deg", "float", f"UR5 {j} joint position") for j in ARM_JOINTS},
+    "finger_width_mm": Column("mm", "float", "RG2 finger width: the two fingers' openings "
+                                             "summed"),
+    **{f"peg_tip_{a}_mm": Column("mm", "float", f"{_GT}the peg's lower end, world {a}")
+       for a in "xyz"},
+    "peg_tilt_deg": Column("deg", "float", f"{_GT}the peg axis's angle from vertical, 0-90"),
+    **{f"hole_{a}_mm": Column("mm", "float", f"{_GT}the hole's true centre, world {a} "
+                                             "(the same every tick)") for a in "xy"},
+}
+
 # Legacy name -> (name, factor that converts the value). The attributes of the episode record
 # keep the legacy names (SI units), so EpisodeRecord.to_row() goes through this mapping too.
 LEGACY: dict[str, tuple[str, float]] = {
@@ -209,12 +236,13 @@ LEGACY: dict[str, tuple[str, float]] = {
 
 
 def column(name: str) -> Column:
-    """The column ``name`` (:data:`COLUMNS`, then :data:`SUMMARY_COLUMNS`).
+    """The column ``name`` (:data:`COLUMNS`, then :data:`SUMMARY_COLUMNS`, then
+    :data:`TRACE_COLUMNS`).
 
     Raises:
         KeyError: If vgs writes no such column.
     """
-    found = COLUMNS.get(name) or SUMMARY_COLUMNS.get(name)
+    found = COLUMNS.get(name) or SUMMARY_COLUMNS.get(name) or TRACE_COLUMNS.get(name)
     if found is None:
         raise KeyError(f"{name!r} is not a column of vgs's tables")
     return found
@@ -299,7 +327,7 @@ DECIMALS = {"s": 3, "h": 7}
 
 
 def _decimals(name: str) -> int | None:
-    found = COLUMNS.get(name) or SUMMARY_COLUMNS.get(name)
+    found = COLUMNS.get(name) or SUMMARY_COLUMNS.get(name) or TRACE_COLUMNS.get(name)
     return DECIMALS.get(found.unit) if found is not None and found.kind == "float" else None
 
 

@@ -3,7 +3,8 @@
 Rendering never runs inside the simulation's control loop: an episode records its states
 (``Trace.qpos``, one copy of ``data.qpos`` per control tick, when a trace is asked for) and
 :class:`SceneRenderer` draws them afterwards on its own model, the cell with its scenery
-(:mod:`vgs.sim.scenery`: floor, named cameras). Training and evaluation never record states.
+(:mod:`vgs.sim.scenery`: floor, named cameras) and a close-up of the hole
+(:data:`HOLE_CAMERA`, on this model only). Training and evaluation never record states.
 
 MuJoCo picks its OpenGL back end from the environment variable ``MUJOCO_GL`` when it is first
 imported: ``egl`` (headless, a GPU or Mesa's EGL), ``osmesa`` (software) or ``glfw`` (a
@@ -26,9 +27,16 @@ import numpy as np
 from vgs.config import CellConfig
 from vgs.errors import ConfigError, VGSError
 from vgs.sim.cell import build_spec
-from vgs.sim.scenery import PERSPECTIVE_CAMERA, add_scenery
+from vgs.sim.scenery import PERSPECTIVE_CAMERA, PERSPECTIVE_POS, add_scenery, look_at_quat
 
 VIDEO_SUFFIXES = (".mp4", ".gif")
+# A close-up of the hole: from the perspective camera's side, HOLE_DISTANCE from the centre of
+# the nominal hole's entrance, looking at it; the hole's displacement (within its radius) stays
+# in view. Added to the drawing model only, never to the simulated cell.
+HOLE_CAMERA = "hole"
+HOLE_DISTANCE = 0.24  # [m]
+HOLE_FOVY = 32.0  # [deg]: about 0.14 m across at the hole
+VIDEO_CAMERAS = (PERSPECTIVE_CAMERA, HOLE_CAMERA)
 
 
 class GLUnavailableError(VGSError):
@@ -109,6 +117,11 @@ def render_model(cfg: CellConfig) -> mujoco.MjModel:
     """
     spec = build_spec(cfg)
     add_scenery(spec, cfg)
+    target = np.array([*cfg.hole.nominal_xy, cfg.hole.depth])
+    direction = np.array(PERSPECTIVE_POS) - target
+    pos = target + HOLE_DISTANCE * direction / np.linalg.norm(direction)
+    spec.worldbody.add_camera(name=HOLE_CAMERA, pos=pos.tolist(),
+                              quat=look_at_quat(pos, target).tolist(), fovy=HOLE_FOVY)
     spec.visual.global_.offwidth = 1920
     spec.visual.global_.offheight = 1080
     model = spec.compile()
@@ -123,7 +136,8 @@ class SceneRenderer:
         cfg: The cell's configuration (the peg of the episode to draw).
         width: Image width [px].
         height: Image height [px].
-        camera: Name of a camera of the scenery (``perspective`` or ``overhead``).
+        camera: Name of a camera of the scenery (``perspective`` or ``overhead``) or
+            :data:`HOLE_CAMERA`.
 
     Raises:
         ConfigError: ``camera`` if no camera has that name, ``video.size`` on a size outside

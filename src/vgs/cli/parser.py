@@ -126,8 +126,8 @@ def _add_demo(sub: Any) -> None:
     demo.add_argument("--out", default="runs/demo",
                       help="folder of demo.png (default: %(default)s)")
     demo.add_argument("--force", action="store_true",
-                      help="overwrite an existing OUT/demo.png or --video file (without it "
-                           "the demo refuses, before running the episode)")
+                      help="overwrite an existing OUT/demo.png, --video, --trace or --rerun "
+                           "file (without it the demo refuses, before running the episode)")
     demo.add_argument("--no-progress", action="store_true",
                       help="no progress lines on stderr during the episode")
     demo.add_argument("--offset", type=float, default=0.0, metavar="MM",
@@ -141,16 +141,33 @@ def _add_demo(sub: Any) -> None:
                       help="the episode's peg: a test condition's, at the far end of its range "
                            "(mass and length +15 %%, com-spread 20 mm; default: %(default)s)")
     demo.add_argument("--video", metavar="FILE",
-                      help="also render the episode from the perspective camera to FILE (.mp4 "
-                           "or .gif), phase and F/T reading on every frame; needs OpenGL "
-                           "(headless: MUJOCO_GL=egl, the default without a display)")
+                      help="also render the episode from --camera to FILE (.mp4 or .gif), "
+                           "phase and F/T reading on every frame; needs OpenGL (headless: "
+                           "MUJOCO_GL=egl, the default without a display)")
+    _camera_flag(demo)
     demo.add_argument("--video-fps", type=float, default=15.0,
                       help="video frames per second (default: %(default)s)")
     demo.add_argument("--video-speed", type=float, default=4.0,
                       help="simulated seconds per second of video (default: %(default)s)")
     demo.add_argument("--video-size", default="480x360", metavar="WxH",
                       help="frame size in pixels (default: %(default)s)")
+    demo.add_argument("--trace", metavar="FILE",
+                      help="also write the episode's per-tick trace to FILE (.parquet): time, "
+                           "phase, TCP pose, tared F/T, joints, finger width, ground truth "
+                           "(docs/columns.md)")
+    demo.add_argument("--rerun", metavar="FILE",
+                      help="also write the episode as a Rerun recording to FILE (.rrd): "
+                           "heightmap, grasp, Q map, TCP, peg and hole, F/T and phase over time "
+                           "(needs the rerun extra)")
     demo.set_defaults(func=cmd_demo)
+
+
+def _camera_flag(parser: Any) -> None:
+    """``--camera`` of the videos (vgs.render.VIDEO_CAMERAS, named here so that the parser
+    imports no MuJoCo)."""
+    parser.add_argument("--camera", default="perspective", choices=("perspective", "hole"),
+                        help="the video's camera: the robot and its workspace, or a close-up "
+                             "of the hole (default: %(default)s)")
 
 
 def _add_sweep(sub: Any) -> None:
@@ -279,6 +296,10 @@ def _add_evaluate(sub: Any) -> None:
                           help="afterwards, run the first N test episodes again by their seeds "
                                "and render them to OUT/videos/ (the policy's Q map beside; "
                                "needs OpenGL) (default: 0)")
+    evaluate.add_argument("--traces", type=int, default=0, metavar="N",
+                          help="afterwards, run the first N test episodes again by their seeds "
+                               "and write their per-tick traces to OUT/traces/ (default: 0)")
+    _camera_flag(evaluate)
     evaluate.set_defaults(func=cmd_evaluate)
 
 

@@ -23,15 +23,24 @@ from vgs.jsonsafe import dumps
 
 
 def cmd_demo(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
-    """One traced episode: phase table (or JSON record), DIR/demo.png and, with ``--video``, the
-    episode rendered as a video."""
+    """One traced episode: phase table (or JSON record), DIR/demo.png and, with ``--video``,
+    ``--trace``, ``--rerun``, the episode as a video, a per-tick Parquet table, a Rerun
+    recording."""
     out = Path(args.out)
-    targets = [out / "demo.png", *([Path(args.video)] if args.video else [])]
+    extra = [Path(name) for name in (args.video, args.trace, args.rerun) if name]
+    targets = [out / "demo.png", *extra]
     existing = [str(path) for path in targets if path.exists() or path.is_symlink()]
     if existing and not args.force:  # before the episode, not after it
         raise ConfigError("demo", f"{', '.join(existing)} exists; add --force to overwrite, or "
-                                  "give another --out/--video")
+                                  "give another --out/--video/--trace/--rerun")
     video_size = parse_video_size(args.video_size) if args.video else None
+    if args.trace or args.rerun:
+        from vgs.tools.trace import check_trace_name, require_rerun
+
+        if args.trace:
+            check_trace_name(args.trace)
+        if args.rerun:
+            require_rerun(args.rerun)
     if args.video:
         check_video_name(args.video)
         headless_gl_default()  # before anything imports mujoco
@@ -53,20 +62,28 @@ def cmd_demo(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
         print(f"demo: episode done, {result.trace.time[-1]:.1f} s simulated in "
               f"{time.monotonic() - started:.0f} s wall", file=sys.stderr, flush=True)
     out.mkdir(parents=True, exist_ok=True)
-    figure = demo_figure(result, out / "demo.png")
-    video = None
+    written = [("figure", demo_figure(result, out / "demo.png"))]
     if args.video and video_size is not None:
         from vgs.tools.demo import demo_video
 
-        video = demo_video(result, cfg.cell, args.video, fps=args.video_fps,
-                           speed=args.video_speed, width=video_size[0], height=video_size[1])
+        written.append(("video", demo_video(result, cfg.cell, args.video, fps=args.video_fps,
+                                            speed=args.video_speed, width=video_size[0],
+                                            height=video_size[1], camera=args.camera)))
+    if args.trace:
+        from vgs.tools.trace import write_trace
+
+        written.append(("trace", write_trace(result, args.trace)))
+    if args.rerun:
+        from vgs.tools.trace import write_rerun
+
+        written.append(("recording", write_rerun(result, args.rerun)))
     if args.json:
         print(dumps(result.record.to_row()))
     else:
         print(format_report(result.record))
-        print(f"\nfigure          {figure}")
-        if video is not None:
-            print(f"video           {video}")
+        print()
+        for label, path in written:
+            print(f"{label:<15} {path}")
     return 0
 
 
@@ -171,8 +188,11 @@ def cmd_evaluate(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     from vgs.experiments.evaluate import EvalSpec, evaluate
 
     episodes = cfg.eval.episodes if args.episodes is None else args.episodes
-    if args.videos < 0:
-        raise ConfigError("videos", f"must be >= 0, got {args.videos}")
+    for flag in ("videos", "traces"):  # before the evaluation, not after it
+        count = getattr(args, flag)
+        if not 0 <= count <= episodes:
+            raise ConfigError(flag, f"must be within 0-{episodes} (the episodes evaluated), "
+                                    f"got {count}")
     if args.videos:
         headless_gl_default()  # before anything imports mujoco
         from vgs.render import require_gl
@@ -182,11 +202,13 @@ def cmd_evaluate(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
                     cfg.reproduce.eval_seed if args.seed is None else args.seed)
     df = evaluate(cfg, spec, Path(args.out), workers=args.workers, backend=args.backend,
                   ray_address=args.ray_address, progress=not args.no_progress)
-    videos = []
-    if args.videos:
-        from vgs.tools.demo import evaluation_videos
+    videos: list[Path] = []
+    traces: list[Path] = []
+    if args.videos or args.traces:
+        from vgs.tools.trace import evaluation_outputs
 
-        videos = evaluation_videos(cfg, spec, Path(args.out), args.videos, df)
+        videos, traces = evaluation_outputs(cfg, spec, Path(args.out), args.videos, args.traces,
+                                            df, camera=args.camera)
     s = summarize(df)
     if args.json:
         print(dumps(s, indent=2))
@@ -202,6 +224,8 @@ def cmd_evaluate(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     print(f"wrote {Path(args.out) / 'episodes.parquet'} (and .csv, summary.json)")
     if videos:
         print(f"videos {', '.join(str(v) for v in videos)}")
+    if traces:
+        print(f"traces {', '.join(str(t) for t in traces)}")
     return 0
 
 

@@ -13,11 +13,12 @@ from __future__ import annotations
 import math
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import mujoco
 import numpy as np
 
 from vgs.assembly.episode import EpisodeRunner, GraspCommand, offset_policy
@@ -46,6 +47,9 @@ class DemoResult:
         q_map: The Q map (H, W) the grasp was chosen from (the chosen rotation's, for the
             rotation action), or None for a policy without one.
         pixel: The chosen pixel (row, col), or None where the policy chose no pixel.
+        model: The model the episode ran in (its recorded states replay in it:
+            :mod:`vgs.tools.trace`).
+        hole_depth: Height of the hole's entrance above the table [m].
     """
 
     record: EpisodeRecord
@@ -59,6 +63,8 @@ class DemoResult:
     policy: str = "center"
     q_map: np.ndarray | None = None
     pixel: tuple[int, int] | None = None
+    model: mujoco.MjModel | None = None
+    hole_depth: float = 0.0
 
 
 def check_offset(offset: float, peg: PegConfig) -> None:
@@ -170,6 +176,8 @@ def run_demo(cfg: ExperimentConfig, seed: int, offset: float = 0.0, policy: str 
         policy=name,
         q_map=q_map,
         pixel=pixel,
+        model=cell.model,
+        hole_depth=cfg.cell.hole.depth,
     )
 
 
@@ -259,8 +267,9 @@ def policy_panel(result: DemoResult, size: int, half: float = 0.08) -> np.ndarra
 
 def demo_video(result: DemoResult, cell: CellConfig, path: str | Path, fps: float = 15.0,
                speed: float = 4.0, width: int = 480, height: int = 360,
-               hold_s: float = 1.5, panel: bool | None = None) -> Path:
-    """Render a traced episode from the ``perspective`` camera and write it as a video.
+               hold_s: float = 1.5, panel: bool | None = None,
+               camera: str = "perspective") -> Path:
+    """Render a traced episode from a camera of :mod:`vgs.render` and write it as a video.
 
     The states recorded per control tick (``trace.qpos``) are drawn after the episode, one
     every ``speed / fps`` simulated seconds; every frame carries the simulated time, the phase
@@ -278,13 +287,15 @@ def demo_video(result: DemoResult, cell: CellConfig, path: str | Path, fps: floa
         hold_s: Seconds the last frame is shown.
         panel: Put :func:`policy_panel` (height x height px) to the right of every frame
             (default: where the policy has a Q map, a trained network).
+        camera: ``perspective`` (robot, workspace and hole) or ``hole`` (a close-up of the
+            hole: :data:`vgs.render.HOLE_CAMERA`).
 
     Returns:
         The written file.
 
     Raises:
         ConfigError: ``video`` on a bad file name, ``video.fps`` / ``video.speed`` if not
-            positive, ``video.size`` on a bad size.
+            positive, ``video.size`` on a bad size, ``camera`` on an unknown camera.
         GLUnavailableError: If no OpenGL context can be made.
     """
     from vgs.render import SceneRenderer, annotate, frame_indices, write_video
@@ -298,7 +309,7 @@ def demo_video(result: DemoResult, cell: CellConfig, path: str | Path, fps: floa
         raise ConfigError("video", "the episode recorded no states")
     indices = frame_indices(np.asarray(trace.time), fps, speed)
     mocap = np.array([*result.hole_xy, 0.0])
-    renderer = SceneRenderer(cell, width, height)
+    renderer = SceneRenderer(cell, width, height, camera=camera)
     try:
         frames = [annotate(renderer.frame(trace.qpos[i], mocap), frame_text(result, i, speed))
                   for i in indices]
@@ -314,38 +325,27 @@ def demo_video(result: DemoResult, cell: CellConfig, path: str | Path, fps: floa
     return write_video(path, frames, fps)
 
 
-def evaluation_videos(cfg: ExperimentConfig, spec: Any, out: Path, count: int,
-                      rows: Any = None, **video: Any) -> list[Path]:
-    """Videos of the first ``count`` test episodes of an evaluation, made after it: each
-    episode is run again by its seed and peg with a trace (:func:`run_demo`, the policy
-    choosing as in the evaluation) and drawn from its recorded states (:func:`demo_video`) to
-    ``out/videos/episode_<index>.mp4`` (``.gif`` without the MP4 writer). Nothing is drawn or
-    traced inside the evaluation.
+def evaluation_replays(cfg: ExperimentConfig, spec: Any, count: int, rows: Any = None,
+                       what: str = "video") -> Iterator[tuple[CellConfig, DemoResult, int]]:
+    """The first ``count`` test episodes of an evaluation run again after it, each by its seed
+    and peg with a trace (:func:`run_demo`, the policy choosing as in the evaluation), in index
+    order. Nothing is drawn or traced inside the evaluation.
 
     Args:
         cfg: The evaluation's configuration.
         spec: Its :class:`vgs.experiments.evaluate.EvalSpec` (policy, condition, seed): the
             scenes are the condition's test scenes (:func:`vgs.config.eval_scenes`).
-        out: Its folder.
-        count: Episodes to draw (the first ones, in index order).
+        count: Episodes to run again (the first ones, in index order).
         rows: The evaluation's table (``index``, ``assembly_time_s``); an episode whose second
             run ends otherwise is reported on stderr.
-        **video: Keyword arguments of :func:`demo_video` (fps, speed, width, height).
+        what: What the episode is run again for (the stderr line's words).
 
-    Returns:
-        The written videos.
+    Yields:
+        The episode's cell (its peg), the traced episode and its index.
     """
     import sys
     from dataclasses import replace
 
-    from vgs.render import require_video_writer
-
-    suffix = ".mp4"
-    try:
-        require_video_writer("x.mp4")
-    except ConfigError:
-        suffix = ".gif"
-    written = []
     for task in eval_scenes(cfg.cell.peg, cfg.eval, spec.condition, spec.seed, max(0, count)):
         result = run_demo(cfg, task.seed, policy=spec.policy, peg=task.peg)
         if rows is not None:
@@ -353,8 +353,17 @@ def evaluation_videos(cfg: ExperimentConfig, spec: Any, out: Path, count: int,
             was = float(row["assembly_time_s"].iloc[0]) if len(row) else math.nan
             now = result.record.assembly_time
             if not (was == now or (math.isnan(was) and math.isnan(now))):
-                print(f"vgs: episode {task.index} ended otherwise when run again for its video "
+                print(f"vgs: episode {task.index} ended otherwise when run again for its {what} "
                       f"({now:.3f} s, the table has {was:.3f} s)", file=sys.stderr)
-        path = out / "videos" / f"episode_{task.index:04d}{suffix}"
-        written.append(demo_video(result, replace(cfg.cell, peg=task.peg), path, **video))
-    return written
+        yield replace(cfg.cell, peg=task.peg), result, task.index
+
+
+def video_suffix() -> str:
+    """``.mp4``, or ``.gif`` without the MP4 writer."""
+    from vgs.render import require_video_writer
+
+    try:
+        require_video_writer("x.mp4")
+    except ConfigError:
+        return ".gif"
+    return ".mp4"
