@@ -141,19 +141,24 @@ def test_demo_rerun_recording_reads_back_with_the_expected_entities(
 
 
 @pytest.mark.slow
-def test_evaluate_traces_the_first_episodes_afterwards(tmp_path: Path) -> None:
-    proc = vgs("evaluate", "--policy", "center", "--episodes", "2", "--traces", "1",
-               "--workers", "1", "--no-progress", "--out", "ev", *SMALL, cwd=tmp_path)
-    assert proc.returncode == 0, proc.stderr
-    assert "ended otherwise" not in proc.stderr  # the second run is the same episode
-    (path,) = (tmp_path / "ev" / "traces").iterdir()
-    assert path.name == "episode_0000.parquet" and "traces ev/traces/episode_0000" in proc.stdout
-    df = pd.read_parquet(path)
-    row = pd.read_parquet(tmp_path / "ev" / "episodes.parquet").set_index("index").loc[0]
-    dt = profile("smoke").cell.sim.control_dt
-    assert df["phase"].isin(PHASES).sum() * dt == pytest.approx(row["assembly_time_s"],
-                                                                abs=2e-3)
-    assert pq.read_schema(path).metadata[b"seed"] == str(row["seed"]).encode()
+def test_evaluate_traces_the_first_episodes_afterwards(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """One second run per episode serves its trace and, with OpenGL, its close-up video."""
+    out = tmp_path / "ev"
+    videos = ["--videos", "1", "--camera", "hole"] if GL else []
+    assert main(["evaluate", "--policy", "center", "--episodes", "2", "--traces", "1", *videos,
+                 "--workers", "1", "--no-progress", "--out", str(out), *SMALL]) == 0
+    printed = capsys.readouterr()
+    assert "ended otherwise" not in printed.err  # the second run is the same episode
+    (path,) = (out / "traces").iterdir()
+    assert path.name == "episode_0000.parquet" and f"traces {path}" in printed.out
+    if GL:
+        assert [v.stem for v in (out / "videos").iterdir()] == ["episode_0000"]
+    table = pd.read_parquet(out / "episodes.parquet").set_index("index")
+    trace, dt = pd.read_parquet(path), profile("smoke").cell.sim.control_dt
+    assert trace["phase"].isin(PHASES).sum() * dt == pytest.approx(
+        table.loc[0, "assembly_time_s"], abs=2e-3)
+    assert pq.read_schema(path).metadata[b"seed"] == str(table.loc[0, "seed"]).encode()
 
 
 def test_more_traces_or_videos_than_episodes_are_refused_before_evaluating(
