@@ -35,7 +35,7 @@ from vgs.runfolder.journal import encode_row, read_journal
 from vgs.runfolder.status import flag_count
 
 ROOT = Path(__file__).resolve().parents[1]
-SUMMARY_TABLES = ("results.csv", "seeds.csv")  # statistics over episodes, not episode rows
+SUMMARY_TABLES = ("results.csv", "seeds.csv", "field.csv")  # statistics over episodes, not episode rows
 ARROW_KINDS = {"bool": ("bool",), "int": ("int64", "int32"), "float": ("double", "float"),
                "str": ("string", "large_string")}
 
@@ -155,7 +155,7 @@ def test_every_table_and_json_file_a_reproduction_writes(quick_reproduction: Any
     # tables: CSV (episode tables in the vocabulary, summary tables in theirs)
     csvs = files("*.csv")
     names = sorted({p.name for p in csvs})
-    assert names == ["episodes.csv", "results.csv", "seeds.csv", "sweep.csv"], names
+    assert names == ["episodes.csv", "field.csv", "results.csv", "seeds.csv", "sweep.csv"], names
     for path in csvs:
         with path.open(newline="") as fh:
             rows = list(csv.DictReader(fh))
@@ -166,7 +166,7 @@ def test_every_table_and_json_file_a_reproduction_writes(quick_reproduction: Any
         for name in header:
             if name in COLUMNS and COLUMNS[name].kind == "bool":
                 assert {r[name] for r in rows} <= {"True", "False"}, (path, name)
-        if path.name != "results.csv" and path.name != "seeds.csv":
+        if path.name not in SUMMARY_TABLES:
             df = read_table(path)
             for name in ("peg_mass_kg", "peg_length_mm", "grasp_offset_mm", "assembly_time_s"):
                 if name in df:

@@ -145,6 +145,17 @@ _GAINS = (("gain", "efficiency gain over the baseline, (T_base - T) / T_base on 
                                  "attempts left out: the summed times of the successes"),
           ("align_gain", "gain on the mean alignment time of the successes (the phase the "
                          "paper studies)"))
+_FIELD_STATS = (
+    *((f"iqm_s_{p}", "s", f"interquartile mean of the successes' assembly times, {p}")
+      for p in ("baseline", "vgs", "center")),
+    *((f"p_faster_than_{p}", "", f"probability that VGS assembles faster than the {p} on a "
+                                 "random paired scene of a random run")
+      for p in ("baseline", "center")),
+)
+_INTERVAL_ENDS = (("", ""),
+                  ("_ci_low", ": lower end of its crossed-bootstrap 95 % interval"),
+                  ("_ci_high", ": upper end of its crossed-bootstrap 95 % interval"))
+
 SUMMARY_COLUMNS: dict[str, Column] = {
     "condition": COLUMNS["condition"],
     "policy": COLUMNS["policy"],
@@ -178,6 +189,11 @@ SUMMARY_COLUMNS: dict[str, Column] = {
         (f"seeds_with_positive_{prefix}", Column("", "int", f"training runs whose {prefix}_pct "
                                                             "is positive")))},
     "seeds": Column("", "int", "training runs averaged"),
+    # vgs seeds' field.csv: the statistics for few runs (Agarwal et al. 2021)
+    "runs": Column("", "int", "training runs"),
+    "scenes": Column("", "int", "test scenes shared by the runs"),
+    **{f"{stat}{end}": Column(unit, "float", what + note)
+       for stat, unit, what in _FIELD_STATS for end, note in _INTERVAL_ENDS},
     **{f"{name}_{policy}": Column(col.unit, col.kind, f"{col.description}, {policy}")
        for policy in ("baseline", "vgs")
        for name, col in (
@@ -372,12 +388,32 @@ def write_parquet(df: Any, path: Path, metadata: dict[str, str] | None = None) -
     pq.write_table(pa.Table.from_arrays(table.columns, schema=schema), path)
 
 
+_FOLDED_SUFFIXES = ("_ci_low", "_ci_high", "_t_low", "_t_high", "_sd_between_seeds")
+
+
 def markdown(names: Any = None) -> str:
     """The vocabulary (or the columns ``names``) as a Markdown table: name, unit, kind,
     description."""
     names = list(COLUMNS) if names is None else list(names)
+    # An interval's ends and the like go on their quantity's row: `gain_pct` and
+    # `gain_ci_low`, `gain_ci_high`, ... (the suffixes after the quantity's stem).
+    folded: dict[str, list[str]] = {}
+    hidden: set[str] = set()
+    for name in names:
+        for suffix in _FOLDED_SUFFIXES:
+            if not name.endswith(suffix):
+                continue
+            stem = name[: -len(suffix)]
+            base = next((b for b in (stem, f"{stem}_pct") if b in names), None)
+            if base is not None:
+                folded.setdefault(base, []).append(suffix)
+                hidden.add(name)
+                break
     lines = ["| column | unit | kind | description |", "|---|---|---|---|"]
     for name in names:
+        if name in hidden:
+            continue
         col = column(name)
-        lines.append(f"| `{name}` | {col.unit or '-'} | {col.kind} | {col.description} |")
+        ends = "".join(f", `{e}`" for e in folded.get(name, []))
+        lines.append(f"| `{name}`{ends} | {col.unit or '-'} | {col.kind} | {col.description} |")
     return "\n".join(lines) + "\n"
