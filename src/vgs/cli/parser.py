@@ -24,6 +24,7 @@ from vgs.cli.folders import (
 from vgs.cli.options import (
     CommandParser,
     UsageError,
+    check_flag_bounds,
     config_from_args,
     seed_arg,
 )
@@ -354,6 +355,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise UsageError(f"{args.command}: does not take {' '.join(extra)} (vgs "
                              f"{args.command} --help lists what it takes)")
         check_paths(args)  # before any work
+        check_flag_bounds(args)
         cfg = config_from_args(args) if hasattr(args, "profile") else None
         return args.func(args, cfg)
     except VGSError as exc:

@@ -149,8 +149,9 @@ def cmd_evaluate(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     from vgs.experiments.evaluate import EvalSpec, evaluate
 
     episodes = cfg.eval.episodes if args.episodes is None else args.episodes
-    if args.videos < 0:
-        raise ConfigError("videos", f"must be >= 0, got {args.videos}")
+    if not 0 <= args.videos <= episodes:
+        raise ConfigError("--videos", f"must lie in [0, {episodes}] (the episodes evaluated), "
+                                      f"got {args.videos}")
     if args.videos:
         headless_gl_default()  # before anything imports mujoco
         from vgs.render import require_gl
