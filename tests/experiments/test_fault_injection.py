@@ -372,3 +372,262 @@ def _alive(pid: int) -> bool:
     except OSError:
         return False
     return state != "Z"
+
+
+# -- malformed files: the right syntax, the wrong shape (issue 53, item 4) ---------------------
+
+def _json_shapes(name: str) -> list[tuple[str, object]]:
+    """(what, how) pairs that keep a metadata file JSON but break its schema."""
+    import json
+
+    def edit(**changes: object):
+        def apply(data: dict) -> dict:
+            return {**data, **changes}
+        return apply
+
+    shapes: list[tuple[str, object]] = [("a list", lambda d: []), ("empty", lambda d: {}),
+                                        ("config empty", edit(config={})),
+                                        ("config a list", edit(config=[])),
+                                        ("config.seed text", lambda d: {**d, "config": {
+                                            **d["config"], "seed": "0"}})]
+    if name == "run.json":
+        shapes += [("mode 1", edit(mode=1)), ("mode other", edit(mode="greedy")),
+                   ("schedule text", edit(schedule_episodes="six")),
+                   ("hosts a dict", edit(hosts={}))]
+    if name == "meta.json":
+        shapes += [("episodes text", edit(episodes="8")), ("seed null", edit(seed=None)),
+                   ("policy 3", edit(policy=3))]
+    if name == "reproduce.json":
+        shapes += [("profile 1", edit(profile=1)), ("walls text", edit(stage_wall_s={"t": "1"}))]
+    del json
+    return shapes
+
+
+def _bytes_of(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in _files(folder)
+            if "tensorboard" not in p.parts and p.name != ".lock"}
+
+
+@pytest.mark.parametrize("kind", ["train", "eval"])
+def test_malformed_metadata_is_refused_by_every_reader(
+        kind: str, tmp_path: Path, reference, capsys: pytest.CaptureFixture[str],
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """run.json / meta.json of the wrong shape or types: every reader refuses in one line (exit
+    2) naming the file, and leaves every file of the folder byte-identical."""
+    import json
+
+    monkeypatch.setattr(os, "cpu_count", lambda: 1)
+    name = "run.json" if kind == "train" else "meta.json"
+    for what, shape in _json_shapes(name):
+        for argv in _readers(kind, tmp_path / "run", tmp_path / "x"):
+            for folder in ("run", "x"):
+                shutil.rmtree(tmp_path / folder, ignore_errors=True)
+            shutil.copytree(reference[kind], tmp_path / "run")
+            path = tmp_path / "run" / name
+            path.write_text(json.dumps(shape(json.loads(path.read_text()))))
+            before = _bytes_of(tmp_path / "run")
+            rc, lines = fakes.vgs(capsys, *argv)
+            fakes.one_line(rc, lines, name)
+            assert "Traceback" not in "".join(lines)
+            assert _bytes_of(tmp_path / "run") == before, (what, argv[0])
+
+
+def test_malformed_training_table_and_checkpoint_are_refused(
+        tmp_path: Path, reference, capsys: pytest.CaptureFixture[str],
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """An empty or wrong-header episodes.csv beside a checkpoint of 6 episodes is not "0/6 not
+    started"; curves on it refuse; a checkpoint whose metadata has another shape is refused."""
+    import json
+    import zipfile
+
+    monkeypatch.setattr(os, "cpu_count", lambda: 1)
+    run = tmp_path / "run"
+    for what in ("empty", "header", "extra column", "text episode"):
+        shutil.rmtree(run, ignore_errors=True)
+        shutil.copytree(reference["train"], run)
+        table = run / "episodes.csv"
+        text = table.read_text()
+        if what == "empty":
+            table.write_text("")
+        elif what == "header":
+            table.write_text(text.replace("episode,", "epoch,", 1))
+        elif what == "extra column":
+            lines = text.splitlines()
+            table.write_text("\n".join([lines[0] + ",foo"] + [ln + ",1" for ln in lines[1:]]))
+        else:
+            lines = text.splitlines()
+            table.write_text("\n".join([lines[0], "x" + lines[1], *lines[2:]]) + "\n")
+        before = _bytes_of(run)
+        for argv in (["status", str(run)], ["curves", str(run), "--out",
+                                              str(tmp_path / "c.png")],
+                     ["train", "--mode", "vgs", "--episodes", "6", "--out", str(run),
+                      *fakes.CLI_FLAGS]):
+            rc, lines = fakes.vgs(capsys, *argv)
+            if what == "extra column" and argv[0] == "train":
+                continue  # (a resume rewrites the table from the checkpoint's rows)
+            assert rc == 2, (what, argv[0], lines)
+            fakes.one_line(rc, lines, "episodes.csv")
+            assert _bytes_of(run) == before, (what, argv[0])
+    # The checkpoint's metadata of another shape.
+    shutil.rmtree(run)
+    shutil.copytree(reference["train"], run)
+    ckpt = run / "checkpoint.pt"
+    with zipfile.ZipFile(ckpt) as zf:
+        meta, tensors = json.loads(zf.read("meta.json")), zf.read("tensors.pt")
+    for key, value in (("episode", "6"), ("agent", []), ("episode", -1)):
+        with zipfile.ZipFile(ckpt, "w", zipfile.ZIP_STORED) as zf:
+            zf.writestr("meta.json", json.dumps({**meta, key: value}))
+            zf.writestr("tensors.pt", tensors)
+        before = _bytes_of(run)
+        for argv in _readers("train", run, tmp_path / "x"):
+            shutil.rmtree(tmp_path / "x", ignore_errors=True)
+            rc, lines = fakes.vgs(capsys, *argv)
+            fakes.one_line(rc, lines, "checkpoint.pt")
+            assert _bytes_of(run) == before, (key, argv[0])
+
+
+def test_malformed_reproduction_and_merged_tables_are_refused(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """reproduce.json of the wrong shape (``{}`` included) is refused by status and report, not
+    read as the paper profile; a merged table with a foreign column or of other types is refused
+    by the report; nothing in the folder changes."""
+    import json
+
+    from vgs.config import profile, to_dict
+
+    data = Path(__file__).parents[1] / "data" / "report_small"
+    run = tmp_path / "run"
+    good = {"profile": "smoke", "config": to_dict(profile("smoke"))}
+    for what, shape in _json_shapes("reproduce.json"):
+        shutil.rmtree(run, ignore_errors=True)
+        shutil.copytree(data, run)
+        (run / "reproduce.json").write_text(json.dumps(shape(good)))
+        before = _bytes_of(run)
+        for argv in (["status", str(run)], ["report", str(run)],
+                     ["grasp-sites", str(run), "--no-progress"]):
+            rc, lines = fakes.vgs(capsys, *argv)
+            assert rc == 2, (what, argv[0], lines)
+            fakes.one_line(rc, lines, "reproduce.json")
+            assert _bytes_of(run) == before, (what, argv[0])
+    table = next(run.glob("eval/*/*/episodes.parquet"))
+    for what in ("foreign column", "text success", "float index"):
+        shutil.rmtree(run)
+        shutil.copytree(data, run)
+        df = pd.read_parquet(table)
+        if what == "foreign column":
+            df["foo"] = 1
+        elif what == "text success":
+            df["success"] = df["success"].map({True: "yes", False: "no"})  # (a legacy name)
+        else:
+            df["index"] = df["index"] + 0.5
+        df.to_parquet(table)
+        before = _bytes_of(run)
+        rc, lines = fakes.vgs(capsys, "report", str(run))
+        fakes.one_line(rc, lines, "episodes.parquet")
+        assert _bytes_of(run) == before, what
+
+
+@pytest.mark.parametrize(("signum", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_a_second_signal_during_shutdown_changes_nothing(
+        signum: int, code: int, tmp_path: Path, reference) -> None:
+    """Two signals 20 ms apart (and a third later) end ``vgs train`` with the documented exit
+    code and one line, never by the signal or with a traceback; the run then resumes to the
+    uninterrupted table (issue 53, item 5)."""
+    import subprocess
+    import sys
+
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(Path(__file__).parents[1]), os.environ.get("PYTHONPATH", "")])}
+    for attempt in range(3):
+        out = tmp_path / f"run{attempt}"
+        argv = ["train", "--mode", "vgs", "--episodes", "6", "--out", str(out),
+                *fakes.CLI_FLAGS]
+        code_text = f"from experiments import fakes; fakes.run_cli({argv!r}, 0.05)"
+        proc = subprocess.Popen([sys.executable, "-c", code_text], env=env,
+                                stderr=subprocess.PIPE, text=True)
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and not (out / "episodes.csv").exists():
+            time.sleep(0.02)
+        time.sleep(0.05 * attempt)
+        proc.send_signal(signum)
+        time.sleep(0.02)
+        proc.send_signal(signum)
+        time.sleep(0.1)
+        if proc.poll() is None:
+            proc.send_signal(signum)
+        _, err = proc.communicate(timeout=60)
+        lines = [line for line in err.splitlines() if not line.startswith("train vgs")]
+        assert proc.returncode == code, (attempt, proc.returncode, err)
+        assert len(lines) == 1 and "Traceback" not in err, err
+        _train(out)
+        _tables_equal("train", out, reference["train"])
+
+
+# -- foreign files: every folder proves whose it is (issue 53, item 1) -------------------------
+
+@pytest.fixture(scope="module")
+def other_seed(tmp_path_factory: pytest.TempPathFactory, fake_physics) -> Path:
+    """A finished training run of seed 1 (the reference is seed 0)."""
+    from vgs.config import override
+
+    out = tmp_path_factory.mktemp("seed1") / "train"
+    train(override(fakes.tiny_config(), "seed", 1), "vgs", out, progress=False, threads=1)
+    return out
+
+
+@pytest.mark.parametrize(("swap", "field"), [("checkpoint.pt", "seed"),
+                                             ("run.json seed", "seed"),
+                                             ("episodes.csv", "episodes.csv")])
+def test_a_foreign_checkpoint_table_or_seed_is_refused_by_every_reader(
+        swap: str, field: str, tmp_path: Path, reference, other_seed,
+        capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
+    """Another seed's checkpoint or table copied into a run, or the seed edited in its
+    run.json: train, status, export-policy and evaluate --policy refuse in one line naming the
+    field, and change nothing."""
+    import json
+
+    monkeypatch.setattr(os, "cpu_count", lambda: 1)
+    run = tmp_path / "run"
+    for argv in _readers("train", run, tmp_path / "x"):
+        for folder in (run, tmp_path / "x"):
+            shutil.rmtree(folder, ignore_errors=True)
+        shutil.copytree(reference["train"], run)
+        if swap == "run.json seed":
+            meta = json.loads((run / "run.json").read_text())
+            meta["config"]["seed"] = 1
+            (run / "run.json").write_text(json.dumps(meta))
+        else:
+            shutil.copyfile(other_seed / swap, run / swap)
+        before = _bytes_of(run)
+        rc, lines = fakes.vgs(capsys, *argv)
+        if swap == "run.json seed" and argv[0] == "train":
+            fakes.one_line(rc, lines, "seed")  # (the request is seed 0: run.json's differs)
+        else:
+            assert rc == 2, (swap, argv[0], lines)
+            fakes.one_line(rc, lines, field)
+        assert _bytes_of(run) == before, (swap, argv[0])
+
+
+def test_a_reproduction_checks_each_run_in_its_slots(tmp_path: Path, reference,
+                                                     other_seed) -> None:
+    """A seed-1 run (or one whose run.json says seed 0) in the vgs_s0 slot of a reproduction is
+    refused, naming the field, not evaluated as vgs_s0."""
+    import json
+
+    from vgs.errors import VGSError
+    from vgs.experiments.reproduce import Reproduction
+
+    cfg = fakes.tiny_config()
+    rep = Reproduction(cfg, tmp_path / "R", workers=1, progress=False)
+    slot = tmp_path / "R" / "train" / "vgs_s0"
+    shutil.copytree(reference["train"], slot)
+    assert rep._trained(slot)
+    for forge, words in (("run", "seed"), ("seed", "seed")):
+        shutil.rmtree(slot)
+        shutil.copytree(other_seed, slot)
+        if forge == "seed":
+            meta = json.loads((slot / "run.json").read_text())
+            meta["config"]["seed"] = 0
+            (slot / "run.json").write_text(json.dumps(meta))
+        with pytest.raises(VGSError, match=words):
+            rep._trained(slot)

@@ -93,7 +93,7 @@ def load_results(out: Path) -> pd.DataFrame:
     if not tables:
         raise ConfigError("report", f"no evaluation results under {out / 'eval'} "
                                     "(expected eval/<policy>/<condition>/episodes.parquet)")
-    return pd.concat([read_table(t) for t in tables], ignore_index=True)
+    return pd.concat([read_table(t, "eval") for t in tables], ignore_index=True)
 
 
 def eval_wall_h(df: pd.DataFrame) -> dict[str, float]:
@@ -216,7 +216,7 @@ def _training_rows(out: Path) -> list[list[str]]:
         csv_path = run / "episodes.csv"
         if not csv_path.exists():
             continue
-        ep = read_table(csv_path)
+        ep = read_table(csv_path, "train")
         last = ep.tail(max(1, len(ep) // 5))
         threshold = read_json(run / "threshold.json").get("threshold_s") \
             if (run / "threshold.json").exists() else None
@@ -255,12 +255,13 @@ def build_report(out: Path, title: str | None = None) -> Path:
     Raises:
         ConfigError: If ``out`` holds no evaluation results.
     """
+    meta = read_json(out / "reproduce.json") if (out / "reproduce.json").exists() else {}
     df = load_results(out)
+    _check_inputs(out)  # every file read below, before anything is written
     figures = out / "figures"
     figures.mkdir(parents=True, exist_ok=True)
     table = results_table(df)
     rounded(table).to_csv(out / "results.csv", index=False)  # times to the ms
-    meta = read_json(out / "reproduce.json") if (out / "reproduce.json").exists() else {}
 
     if title is None:
         title = "VGS reproduction report" + (f" ({meta['profile']} profile)"
@@ -286,6 +287,22 @@ def build_report(out: Path, title: str | None = None) -> Path:
     return out / "report.md"
 
 
+def _check_inputs(out: Path) -> None:
+    """Read (and so check against their schemas) the training runs' ``run.json`` and
+    ``episodes.csv`` and the evaluations' ``meta.json`` that the report uses.
+
+    Raises:
+        CorruptFileError: Naming the first damaged file.
+    """
+    for run in sorted((out / "train").glob("*")):
+        if (run / "run.json").exists():
+            read_json(run / "run.json")
+        if (run / "episodes.csv").exists():
+            read_table(run / "episodes.csv", "train")
+    for meta in sorted((out / "eval").glob("**/meta.json")):
+        read_json(meta)
+
+
 def _provenance_section(doc: Doc, out: Path, df: pd.DataFrame, meta: dict[str, Any]) -> None:
     """How the run was made: command, machine, revision, engine, wall times, shortcuts."""
     tested = [provenance_text(read_json(m).get("provenance"))
@@ -307,7 +324,7 @@ def _provenance_section(doc: Doc, out: Path, df: pd.DataFrame, meta: dict[str, A
             doc.p("Wall time per stage: " + ", ".join(
                 f"{k} {v / 60:.1f} min" for k, v in stages.items())
                 + f" ({sum(stages.values()) / 3600:.2f} h in all).")
-        own = {run.name: read_table(run / "episodes.csv")["wall_s"].sum() / 3600.0
+        own = {run.name: read_table(run / "episodes.csv", "train")["wall_s"].sum() / 3600.0
                for run in train_folders(out) if (run / "episodes.csv").exists()}
         if own:
             doc.p("Each training run's own wall time, the sum of its table's `wall_s` (it "
@@ -458,7 +475,7 @@ def _training_section(doc: Doc, out: Path, figures: Path) -> None:
 
         curves = figures / "learning_curves.png"
         plot_curves(runs, curves, window=max(5, min(50, len(read_table(
-            runs[0] / "episodes.csv")) // 8)))
+            runs[0] / "episodes.csv", "train")) // 8)))
         doc.img(curves, "Learning curves (moving means) and grasp offsets during training")
         from vgs.analysis.heatmap import plot_heatmaps
 
