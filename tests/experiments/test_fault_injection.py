@@ -538,11 +538,12 @@ def test_a_second_signal_during_shutdown_changes_nothing(
 
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(
         [str(Path(__file__).parents[1]), os.environ.get("PYTHONPATH", "")])}
-    for attempt in range(3):
+    for attempt in range(2):
         out = tmp_path / f"run{attempt}"
         argv = ["train", "--mode", "vgs", "--episodes", "6", "--out", str(out),
                 *fakes.CLI_FLAGS]
-        code_text = f"from experiments import fakes; fakes.run_cli({argv!r}, 0.05)"
+        code_text = ("import os; os.cpu_count = lambda: 1; from experiments import fakes; "
+                     f"fakes.run_cli({argv!r}, 0.05)")  # one torch thread, as the reference
         proc = subprocess.Popen([sys.executable, "-c", code_text], env=env,
                                 stderr=subprocess.PIPE, text=True)
         deadline = time.monotonic() + 60
@@ -631,3 +632,43 @@ def test_a_reproduction_checks_each_run_in_its_slots(tmp_path: Path, reference,
             (slot / "run.json").write_text(json.dumps(meta))
         with pytest.raises(VGSError, match=words):
             rep._trained(slot)
+
+
+def test_a_forged_or_missing_evaluation_is_refused_or_said(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A merged table changed after its evaluation wrote it (every success flipped, every time
+    1 s) is refused by report and seeds, naming it; a missing or unfinished evaluation is said
+    in the report, never left out silently (issue 53, item 2)."""
+    import json
+
+    from vgs.config import profile, to_dict
+    from vgs.runfolder.common import table_digests
+
+    data = Path(__file__).parents[1] / "data" / "report_small"
+    run = tmp_path / "run"
+    shutil.copytree(data, run)
+    (run / "reproduce.json").write_text(json.dumps({"profile": "smoke",
+                                                    "config": to_dict(profile("smoke"))}))
+    for folder in run.glob("eval/*/*"):
+        (folder / "summary.json").write_text(json.dumps(
+            {"policy": folder.parent.name, "condition": folder.name,
+             "tables_sha256": table_digests(folder)}))
+    good = tmp_path / "good"
+    shutil.copytree(run, good)
+    table = run / "eval" / "vgs" / "nominal" / "episodes.parquet"
+    df = pd.read_parquet(table)
+    df["success"] = ~df["success"].astype(bool)
+    df["assembly_time"] = 1.0
+    df.to_parquet(table)
+    before = _bytes_of(run)
+    for argv in (["report", str(run)], ["seeds", str(run), "--out", str(tmp_path / "s")]):
+        rc, lines = fakes.vgs(capsys, *argv)
+        fakes.one_line(rc, lines, "episodes.parquet", "SHA-256")
+        assert _bytes_of(run) == before, argv[0]
+    shutil.rmtree(good / "eval" / "vgs" / "mass")
+    (good / "eval" / "vgs" / "length" / "summary.json").unlink()
+    rc, lines = fakes.vgs(capsys, "report", str(good))
+    assert rc == 0, lines
+    text = (good / "report.md").read_text()
+    assert "vgs on mass (no table in eval/vgs/mass)" in text
+    assert "vgs on length (unfinished: eval/vgs/length has no summary.json)" in text

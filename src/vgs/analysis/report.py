@@ -53,7 +53,7 @@ from vgs.checkpoint import atomic_write_text  # noqa: E402
 from vgs.columns import rounded  # noqa: E402
 from vgs.config import CONDITIONS  # noqa: E402
 from vgs.errors import ConfigError  # noqa: E402
-from vgs.runfolder.common import read_json, read_table  # noqa: E402
+from vgs.runfolder.common import check_table_written, read_json, read_table  # noqa: E402
 from vgs.runfolder.layout import eval_tables, holds_network, train_folders  # noqa: E402
 
 
@@ -93,6 +93,8 @@ def load_results(out: Path) -> pd.DataFrame:
     if not tables:
         raise ConfigError("report", f"no evaluation results under {out / 'eval'} "
                                     "(expected eval/<policy>/<condition>/episodes.parquet)")
+    for t in tables:
+        check_table_written(t)  # the table its evaluation wrote, not a changed one
     return pd.concat([read_table(t, "eval") for t in tables], ignore_index=True)
 
 
@@ -268,6 +270,8 @@ def build_report(out: Path, title: str | None = None) -> Path:
                                              if meta.get("profile") else "")
     doc = Doc(out)
     doc.h(1, title)
+    if gaps := missing_evaluations(out, meta, df):
+        doc.p("**Not in this report, or only in part**: " + "; ".join(gaps) + ".")
     _provenance_section(doc, out, df, meta)
     _reading_section(doc, df)
     _headline_section(doc, df, table, meta)
@@ -285,6 +289,35 @@ def build_report(out: Path, title: str | None = None) -> Path:
     atomic_write_text(out / "report.md", doc.markdown())
     atomic_write_text(out / "report.html", doc.html(title))
     return out / "report.md"
+
+
+def missing_evaluations(out: Path, meta: dict[str, Any], df: pd.DataFrame) -> list[str]:
+    """What the reproduction in ``out`` planned (its ``reproduce.json``, ``meta``) that its
+    merged tables ``df`` lack: a policy on a condition without a table, with fewer rows than
+    planned, or without the ``summary.json`` that marks it finished. Empty without a
+    ``reproduce.json`` (a folder of tables is read as it is)."""
+    if not meta:
+        return []
+    from vgs.runfolder.layout import eval_jobs
+    from vgs.runfolder.status import recorded_config
+
+    cfg = recorded_config(out / "reproduce.json", meta["config"])
+    planned: dict[tuple[str, str], int] = {}
+    for job in eval_jobs(cfg, out):
+        key = (job.label, job.condition)
+        planned[key] = planned.get(key, 0) + cfg.eval.episodes
+    counts = df.groupby(["policy", "condition"]).size().to_dict() if len(df) else {}
+    gaps = []
+    for (label, condition), n in planned.items():
+        got = int(counts.get((label, condition), 0))
+        where = f"eval/{label}/{condition}"
+        if not got:
+            gaps.append(f"{label} on {condition} (no table in {where})")
+        elif got < n:
+            gaps.append(f"{label} on {condition} ({got} of {n} test episodes in {where})")
+        elif not (out / where / "summary.json").exists():
+            gaps.append(f"{label} on {condition} (unfinished: {where} has no summary.json)")
+    return gaps
 
 
 def _check_inputs(out: Path) -> None:

@@ -52,6 +52,7 @@ from vgs.runfolder.common import (
     provenance,
     read_json,
     read_table,
+    table_digests,
     write_json,
 )
 from vgs.runfolder.folderkind import claim
@@ -238,6 +239,7 @@ class Reproduction:
         dest.mkdir(parents=True, exist_ok=True)
         write_tables(df, dest)
         write_json(dest / "summary.json", {"policy": label, "condition": condition,
+                                           "tables_sha256": table_digests(dest),
                                            **summarize(df)})
 
     def _sweep_unlocked(self) -> None:

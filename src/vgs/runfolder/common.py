@@ -191,6 +191,41 @@ def check_table_digest(table: Path, ckpt: Path, saved: dict[str, Any]) -> None:
                                       "run's, or changed; restore it")
 
 
+TABLE_FILES = ("episodes.parquet", "episodes.csv")
+
+
+def table_digests(folder: Path) -> dict[str, str]:
+    """``{file name: SHA-256}`` of an evaluation's tables in ``folder`` (written into its
+    ``summary.json`` as ``tables_sha256``, so that a reader can tell the tables the evaluation
+    wrote from changed ones)."""
+    import hashlib
+
+    return {name: hashlib.sha256(read_regular(folder / name, MAX_JOURNAL_BYTES)).hexdigest()
+            for name in TABLE_FILES if (folder / name).exists()}
+
+
+def check_table_written(table: Path) -> None:
+    """An evaluation table against the SHA-256 its ``summary.json`` recorded
+    (``tables_sha256``; summaries written before it record none: nothing to check).
+
+    Raises:
+        CorruptFileError: If the table is not the one the evaluation wrote.
+    """
+    import hashlib
+
+    summary = table.parent / "summary.json"
+    if not summary.exists():
+        return
+    recorded = read_json(summary).get("tables_sha256")
+    if not isinstance(recorded, dict) or table.name not in recorded:
+        return
+    if hashlib.sha256(read_regular(table, MAX_JOURNAL_BYTES)).hexdigest() != recorded[table.name]:
+        raise CorruptFileError(table, "is not the table its evaluation wrote (its SHA-256 "
+                                      "differs from summary.json's): changed since; run the "
+                                      "evaluation (or vgs reproduce) again to rebuild it from "
+                                      "its journals")
+
+
 def _unknown(saved: dict[str, Any], known: dict[str, Any], prefix: str = "") -> str | None:
     """The first dotted path in ``saved`` that ``known`` lacks, or None."""
     for key, value in saved.items():
