@@ -418,8 +418,12 @@ def test_malformed_metadata_is_refused_by_every_reader(
 
     monkeypatch.setattr(os, "cpu_count", lambda: 1)
     name = "run.json" if kind == "train" else "meta.json"
+    readers = _readers(kind, tmp_path / "run", tmp_path / "x")
+    if kind == "train":
+        readers += [["heatmap", str(tmp_path / "run"), "--out", str(tmp_path / "x" / "h.png")],
+                    ["curves", str(tmp_path / "run"), "--out", str(tmp_path / "x" / "c.png")]]
     for what, shape in _json_shapes(name):
-        for argv in _readers(kind, tmp_path / "run", tmp_path / "x"):
+        for argv in readers:
             for folder in ("run", "x"):
                 shutil.rmtree(tmp_path / folder, ignore_errors=True)
             shutil.copytree(reference[kind], tmp_path / "run")
@@ -672,3 +676,130 @@ def test_a_forged_or_missing_evaluation_is_refused_or_said(
     text = (good / "report.md").read_text()
     assert "vgs on mass (no table in eval/vgs/mass)" in text
     assert "vgs on length (unfinished: eval/vgs/length has no summary.json)" in text
+
+
+# -- the small ones (issue 53, item 6) -----------------------------------------------------------
+
+def test_a_finished_run_run_again_changes_nothing(tmp_path: Path, reference,
+                                                  capsys: pytest.CaptureFixture[str],
+                                                  monkeypatch: pytest.MonkeyPatch) -> None:
+    """No new TensorBoard events file, every file byte-identical."""
+    monkeypatch.setattr(os, "cpu_count", lambda: 1)
+    run = tmp_path / "run"
+    shutil.copytree(reference["train"], run)
+    before = _bytes_of(run)
+    events = sorted((run / "tensorboard").rglob("*"))
+    rc, lines = fakes.vgs(capsys, "train", "--mode", "vgs", "--episodes", "6", "--out", str(run),
+                          *fakes.CLI_FLAGS)
+    assert rc == 0, lines
+    assert sorted((run / "tensorboard").rglob("*")) == events
+    assert _bytes_of(run) == before
+
+
+def test_a_refused_command_leaves_no_folder_behind(tmp_path: Path) -> None:
+    from vgs.errors import ConfigError
+    from vgs.runfolder.common import locked
+
+    new = tmp_path / "new"
+    with pytest.raises(ConfigError), locked(new):
+        raise ConfigError("x", "refused after the lock")
+    assert not new.exists()
+    (tmp_path / "old").mkdir()
+    with pytest.raises(ConfigError), locked(tmp_path / "old"):
+        raise ConfigError("x", "refused after the lock")
+    assert (tmp_path / "old").is_dir()  # a folder that was there stays
+
+
+def test_publish_refuses_another_kind_of_folder_and_another_report(
+        tmp_path: Path, reference, capsys: pytest.CaptureFixture[str]) -> None:
+    import json
+
+    from vgs.config import profile, to_dict
+
+    data = Path(__file__).parents[1] / "data" / "report_small"
+    repro = tmp_path / "R"
+    shutil.copytree(data, repro)
+    (repro / "reproduce.json").write_text(json.dumps({"profile": "smoke",
+                                                      "config": to_dict(profile("smoke"))}))
+    dest = tmp_path / "run"
+    shutil.copytree(reference["train"], dest)
+    before = _bytes_of(dest)
+    rc, lines = fakes.vgs(capsys, "report", str(repro), "--publish", str(dest))
+    fakes.one_line(rc, lines, "publish:", "training run")
+    assert _bytes_of(dest) == before
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "report.md").write_text("# another reproduction\n")
+    rc, lines = fakes.vgs(capsys, "report", str(repro), "--publish", str(other))
+    fakes.one_line(rc, lines, "publish:", "another reproduction")
+    assert (other / "report.md").read_text() == "# another reproduction\n"
+
+
+def test_a_full_disk_names_the_folder(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                      monkeypatch: pytest.MonkeyPatch) -> None:
+    import errno
+
+    from vgs.cli import parser
+
+    def full(args: object, cfg: object) -> int:
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(parser, "cmd_train", full)
+    rc, lines = fakes.vgs(capsys, "train", "--mode", "vgs", "--out", str(tmp_path / "r"),
+                          "--profile", "smoke")
+    fakes.one_line(rc, lines, str(tmp_path / "r"), "No space left on device")
+
+
+def test_the_env_refuses_overrides_that_are_no_mapping() -> None:
+    from vgs.envs.grasp_assemble import make_config
+    from vgs.errors import ConfigError
+
+    for overrides in ([("cell.peg.mass", 0.6)], {1: 0.6}, "cell.peg.mass=0.6"):
+        with pytest.raises(ConfigError, match="overrides"):
+            make_config("smoke", overrides)  # type: ignore[arg-type]
+
+
+def _random_json(rnd: random.Random, depth: int = 0) -> object:
+    choice = rnd.randrange(9 if depth < 3 else 6)
+    if choice == 6:
+        return [_random_json(rnd, depth + 1) for _ in range(rnd.randrange(3))]
+    if choice == 7:
+        return {rnd.choice(["mode", "config", "seed", "episodes", "a"]):
+                _random_json(rnd, depth + 1) for _ in range(rnd.randrange(3))}
+    return [None, True, rnd.randint(-3, 10**6), rnd.random() * 10, "", "x" * rnd.randrange(40),
+            None, None, {"name": "smoke", "seed": -1}][choice]
+
+
+def test_fuzz_of_the_metadata_readers(tmp_path: Path, reference,
+                                      capsys: pytest.CaptureFixture[str]) -> None:
+    """Seeded random values in the fields of run.json, meta.json and reproduce.json (and random
+    documents):
+    ``vgs status`` reports or refuses in one line, never a traceback or another exit code."""
+    import json
+
+    from vgs.config import profile, to_dict
+
+    rnd = random.Random(53)
+    repro = tmp_path / "repro_source"
+    shutil.copytree(Path(__file__).parents[1] / "data" / "report_small", repro)
+    (repro / "reproduce.json").write_text(json.dumps({
+        "profile": "smoke", "config": to_dict(profile("smoke")), "stage_wall_s": {"train": 1.0},
+        "git_revision": "abc", "machine": "m", "command": "vgs reproduce"}))
+    for kind, name, source in (("train", "run.json", reference["train"]),
+                               ("eval", "meta.json", reference["eval"]),
+                               ("repro", "reproduce.json", repro)):
+        good = json.loads((source / name).read_text())
+        run = tmp_path / kind
+        shutil.copytree(source, run)
+        for _ in range(40):
+            doc = dict(good)
+            if rnd.random() < 0.2:
+                doc = _random_json(rnd)  # type: ignore[assignment]
+            else:
+                for key in rnd.sample(sorted(good), rnd.randrange(1, 3)):
+                    doc[key] = _random_json(rnd)
+            (run / name).write_text(json.dumps(doc))
+            rc, lines = fakes.vgs(capsys, "status", str(run))
+            assert rc in (0, 2), (doc, lines)
+            if rc == 2:
+                fakes.one_line(rc, lines)

@@ -30,14 +30,16 @@ class Field:
         kinds: The JSON kinds it may hold: ``str``, ``int`` (not a bool), ``number``, ``bool``,
             ``dict``, ``list`` and ``null``.
         required: Whether the document must hold it.
+        items: The kind of each item of a list, or ``""`` for any.
     """
 
     kinds: tuple[str, ...]
     required: bool = False
+    items: str = ""
 
 
-def _f(*kinds: str, required: bool = False) -> Field:
-    return Field(kinds, required)
+def _f(*kinds: str, required: bool = False, items: str = "") -> Field:
+    return Field(kinds, required, items)
 
 
 # The configuration a file records: at least these keys (every vgs has written them), so that
@@ -55,7 +57,8 @@ JSON_SCHEMAS: dict[str, dict[str, Field]] = {
         "mode": _f("str", required=True), "config": _f("dict", required=True),
         "schedule_episodes": _f("int"), "torch_threads": _f("int"),
         "git_revision": _f("str", "null"), "python": _f("str"), "torch": _f("str"),
-        "hosts": _f("list"), "provenance": _PROVENANCE, "resumed_with": _f("list"),
+        "hosts": _f("list", items="dict"), "provenance": _PROVENANCE,
+        "resumed_with": _f("list", items="dict"),
         "run_id": _f("str"),
     },
     "meta.json": {
@@ -106,6 +109,11 @@ def check_fields(data: dict[str, Any], schema: dict[str, Field], path: Path | st
         if kind not in spec.kinds and not (kind == "int" and "number" in spec.kinds):
             raise CorruptFileError(path, f"{prefix}{key}: expected "
                                          f"{' or '.join(spec.kinds)}, got {kind}")
+        if spec.items and kind == "list":
+            for i, item in enumerate(data[key]):
+                if kind_of(item) != spec.items:
+                    raise CorruptFileError(path, f"{prefix}{key}[{i}]: expected {spec.items}, "
+                                                 f"got {kind_of(item)}")
 
 
 def check_json(path: Path, data: Any) -> None:
