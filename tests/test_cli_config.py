@@ -36,7 +36,7 @@ def test_peg_diameter_keeps_the_hole_made_for_the_nominal_peg() -> None:
         (("--peg-diameter", "0.0315", "--clearance", "0.001"), "hole.clearance"),
         (("--peg-diameter", "0.031"), "hole.clearance"),
         (("--clearance", "0"), "hole.clearance"),
-        (("--peg-mass", "-1"), "peg.mass"),
+        (("--peg-mass", "-1"), "cell.peg.mass"),
         (("--hole-depth", "0.02"), "hole.depth"),
         (("--profile", "huge"), "profile"),
         (("--set", "cell.peg.mass"), "set"),
@@ -74,7 +74,7 @@ def test_tuple_fields_take_unquoted_items() -> None:
 def test_main_reports_one_line(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["demo", "--peg-mass", "-1"]) == 2
     err = capsys.readouterr().err
-    assert err == "vgs: error: peg.mass: must be a positive number, got -1.0\n"
+    assert err == "vgs: error: --peg-mass: must lie in [0.001, 50], got -1.0\n"
 
 
 def test_version(capsys: pytest.CaptureFixture[str]) -> None:

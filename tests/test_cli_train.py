@@ -42,7 +42,7 @@ def test_train_then_heatmap(tmp_path: Path) -> None:
         (["train", "--mode", "vgs", "--out", "x", "--set", "agent.momentum=2", "--profile",
           "smoke"], "agent.momentum"),
         (["train", "--mode", "vgs", "--out", "x", "--episodes", "0", "--profile", "smoke"],
-         "train.episodes"),
+         "--episodes: must lie in [1, 1000000]"),
         (["train", "--mode", "vgs", "--out", "x", "--backbone", "resnet", "--profile", "smoke"],
          "network.backbone"),
         (["heatmap", "no/such/run", "--out", "x.png"], "run_dir"),

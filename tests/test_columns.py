@@ -35,7 +35,8 @@ from vgs.runfolder.journal import encode_row, read_journal
 from vgs.runfolder.status import flag_count
 
 ROOT = Path(__file__).resolve().parents[1]
-SUMMARY_TABLES = ("results.csv", "seeds.csv", "field.csv")  # statistics over episodes, not episode rows
+# statistics over episodes, not episode rows
+SUMMARY_TABLES = ("results.csv", "seeds.csv", "field.csv")
 ARROW_KINDS = {"bool": ("bool",), "int": ("int64", "int32"), "float": ("double", "float"),
                "str": ("string", "large_string")}
 

@@ -4,6 +4,7 @@ its folder or moved to another; the replay's re-rendered heightmaps are the ones
 from __future__ import annotations
 
 import csv
+import json
 import shutil
 from pathlib import Path
 from typing import Any
@@ -11,7 +12,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from vgs.config import ExperimentConfig, override, profile
+from vgs.config import ExperimentConfig, override, profile, to_dict
 from vgs.errors import ConfigError
 from vgs.experiments import train as train_mod
 
@@ -139,7 +140,8 @@ def test_re_rendered_replay_heightmaps_equal_the_stored_ones(full_run) -> None:
 
 
 def test_mode_mismatch_on_resume_is_an_error(tmp_path: Path) -> None:
-    (tmp_path / "run.json").write_text('{"mode": "baseline", "config": {}}')
+    (tmp_path / "run.json").write_text(json.dumps({"mode": "baseline",
+                                                   "config": to_dict(tiny_config())}))
     with pytest.raises(ConfigError, match="mode"):
         train_mod.train(tiny_config(), "vgs", tmp_path, progress=False)
 

@@ -268,6 +268,18 @@ def _open(path: Path) -> Iterator[zipfile.ZipFile]:
             yield zf
 
 
+# The metadata of a checkpoint (beside ``format``): key -> the types it must hold.
+META_SCHEMA: dict[str, tuple[type, ...]] = {
+    "episode": (int,), "threshold": (int, float, type(None)),
+    "exploration_times": (list, type(None)), "rng_state": (dict, type(None)),
+    "monitor": (dict,), "agent": (dict,), "replay": (dict,),
+    "table_sha256": (str, type(None)), "run": (dict, type(None)),
+}
+
+
+LOAD_REQUIRED = ("episode", "monitor", "agent", "replay")
+
+
 def read_meta(path: Path, verify: bool = True) -> dict[str, Any]:
     """The metadata of a checkpoint, without torch and without unpickling anything.
 
@@ -300,7 +312,29 @@ def read_meta(path: Path, verify: bool = True) -> dict[str, Any]:
         found = meta.get("format") if isinstance(meta, dict) else None
         raise CheckpointError(path, f"has format {found!r}, this vgs reads "
                                     f"{' and '.join(map(repr, READS))}")
+    check_meta(path, meta, ("episode",))
     return meta
+
+
+def check_meta(path: Path, meta: dict[str, Any], required: tuple[str, ...]) -> None:
+    """A checkpoint's metadata against :data:`META_SCHEMA`: the ``required`` keys present, each
+    key it holds of its types, the episode counter >= 0.
+
+    Raises:
+        CheckpointError: Naming the key.
+    """
+    for key, kinds in META_SCHEMA.items():
+        if key not in meta:
+            if key in required:
+                raise CheckpointError(path, f"has metadata without {key!r}; train again into a "
+                                            "new folder")
+            continue
+        if not isinstance(meta[key], kinds) or isinstance(meta[key], bool):
+            raise CheckpointError(path, f"has metadata whose {key!r} is a "
+                                        f"{type(meta[key]).__name__}; train again into a new "
+                                        "folder")
+    if meta["episode"] < 0:
+        raise CheckpointError(path, f"has metadata whose 'episode' is {meta['episode']}")
 
 
 def load(path: Path, map_location: str = "cpu") -> tuple[dict[str, Any], dict[str, Any]]:
@@ -316,6 +350,7 @@ def load(path: Path, map_location: str = "cpu") -> tuple[dict[str, Any], dict[st
     import torch
 
     meta = read_meta(path, verify=True)
+    check_meta(path, meta, LOAD_REQUIRED)
     with _open(path) as zf:
         data = zf.read(TENSORS)
     try:

@@ -25,7 +25,7 @@ from typing import Any
 from vgs.errors import ConfigError
 
 SEED_FIELDS = ("seed", "reproduce.eval_seed", "reproduce.train_seeds")
-_MAX_SEED = 2**63 - 1
+MAX_SEED = 2**63 - 1
 
 
 def check_seed(field: str, value: Any) -> int:
@@ -34,7 +34,7 @@ def check_seed(field: str, value: Any) -> int:
     Raises:
         ConfigError: ``field`` otherwise.
     """
-    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= _MAX_SEED:
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= MAX_SEED:
         raise ConfigError(field, f"a seed must be a non-negative integer, got {_shown(value)}")
     return value
 
@@ -120,6 +120,7 @@ def _walk(cfg: Any, prefix: str) -> Any:
 # What the machine can hold and the cell can be: every numeric setting that sizes memory, time
 # or the physics has a bound, checked with the types (dotted path -> (lowest, highest)).
 MAX_EPISODES = 1_000_000
+MAX_TIME_S = 3600.0  # the longest phase time-out (vgs.config.control.MAX_PHASE_TIMEOUT_S)
 BOUNDS: dict[str, tuple[float, float]] = {
     "train.episodes": (1, MAX_EPISODES), "eval.episodes": (1, MAX_EPISODES),
     "train.checkpoint_every": (1, MAX_EPISODES), "train.parallel_episodes": (1, 256),
@@ -133,14 +134,69 @@ BOUNDS: dict[str, tuple[float, float]] = {
     "cell.hole.clearance": (0.0, 0.05), "cell.hole.outer_radius": (1e-3, 0.3),
     "cell.hole.segments": (8, 512), "cell.hole.peg_diameter": (1e-3, 0.11),
     "cell.sim.timestep": (1e-5, 0.01), "cell.sim.control_decimation": (1, 1000),
-    "cell.sim.noslip_iterations": (0, 1000),
+    "cell.sim.noslip_iterations": (0, 1000), "cell.gripper.force": (3.0, 40.0),
     "reproduce.sweep_offsets": (0, 1000), "reproduce.sweep_trials": (0, 100_000),
+    # Counts of the assembly's loops.
+    "assembly.max_retries": (0, 100), "assembly.max_align_adjustments": (1, 1000),
+    "assembly.max_insert_stalls": (0, 1000), "assembly.plane_window": (1, 1000),
+    # Times [s]: each at most the longest phase time-out (and, below, its phase's own).
+    "assembly.settle_time": (0.0, MAX_TIME_S), "assembly.slide_settle_time": (0.0, MAX_TIME_S),
+    "assembly.still_time": (0.0, MAX_TIME_S), "assembly.hop_press_time": (0.0, MAX_TIME_S),
+    "assembly.hop_settle_time": (0.0, MAX_TIME_S), "assembly.wiggle_period": (0.01, MAX_TIME_S),
+    "cell.sim.contact_timeconst": (2e-5, 1.0),
+    # Speeds [m/s, rad/s]: at least a millimetre a second, so that every move ends.
+    "assembly.approach_speed": (1e-3, 1.0), "assembly.slide_speed": (1e-3, 1.0),
+    "assembly.insert_speed": (1e-3, 1.0), "assembly.hop_lift_speed": (1e-3, 1.0),
+    "assembly.hop_speed": (1e-3, 1.0), "assembly.hop_descent_speed": (1e-3, 1.0),
+    "controller.max_speed": (1e-3, 2.0), "controller.max_angular_speed": (1e-2, 10.0),
+    "cell.gripper.closing_speed": (1e-3, 1.0),
+    # Rates.
+    "cell.ft.cutoff_hz": (0.0, 1000.0), "agent.learning_rate": (1e-12, 10.0),
+    "agent.weight_decay": (0.0, 1.0), "reward.threshold_percentile": (0.0, 100.0),
 }
+
+# The waits of each assembly phase that run without a look at its time-out (vgs.assembly: the
+# settles after a move, a touch-down's press, the slide's rest window, a wiggle): together they
+# must fit within the phase's time-out, so that no phase outlives it.
+PHASE_WAITS: dict[str, tuple[str, ...]] = {
+    "transport": ("settle_time", "settle_time"),  # before the peg's estimate; after the move
+    "approach": ("settle_time", "settle_time"),  # after a retry's turn; after the tilt
+    "search": ("hop_settle_time", "hop_press_time"),
+    "slide": ("slide_settle_time", "still_time"),
+    "align": ("wiggle_period",),
+    "insert": ("wiggle_period",),
+}
+
+
+def check_phase_waits(assembly: Any) -> None:
+    """Each phase's waits (:data:`PHASE_WAITS`) summed, ``sum(w) <= timeout(phase)``.
+
+    Raises:
+        ConfigError: Naming the longest wait of the first phase they overrun, its sum and the
+            time-out.
+    """
+    for phase, names in PHASE_WAITS.items():
+        total = sum(float(getattr(assembly, name)) for name in names)
+        limit = assembly.timeout(phase)
+        if total > limit:
+            longest = max(names, key=lambda name: float(getattr(assembly, name)))
+            parts = " + ".join(f"{getattr(assembly, name):g}" for name in names)
+            raise ConfigError(f"assembly.{longest}", f"the {phase} phase waits {parts} = "
+                                                     f"{total:g} s between its time-out checks; "
+                                                     f"at most its time-out {limit:g} s "
+                                                     f"(assembly.timeouts)")
 
 
 def _shown(value: Any) -> str:
     text = repr(value)
     return text if len(text) <= 60 else f"{text[:40]}... ({len(text)} characters)"
+
+
+def bound_text(low: float, high: float) -> str:
+    """``[low, high]`` as a refusal names it: whole numbers written out (``1000000``)."""
+    def one(x: float) -> str:
+        return str(int(x)) if float(x).is_integer() and abs(x) < 1e16 else f"{x:g}"
+    return f"[{one(low)}, {one(high)}]"
 
 
 def check_bounds(cfg: Any) -> None:
@@ -156,12 +212,12 @@ def check_bounds(cfg: Any) -> None:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             continue
         if not low <= value <= high:
-            raise ConfigError(path, f"must lie in [{low:g}, {high:g}], got {_shown(value)}")
+            raise ConfigError(path, f"must lie in {bound_text(low, high)}, got {_shown(value)}")
 
 
 def check_config(cfg: Any) -> Any:
-    """``cfg`` with its types checked and ints of float fields made floats; seeds and the
-    bounds of :data:`BOUNDS` checked.
+    """``cfg`` with its types checked and ints of float fields made floats; seeds, the
+    bounds of :data:`BOUNDS` and the phases' waits (:func:`check_phase_waits`) checked.
 
     Raises:
         ConfigError: Naming the first field with a wrong type, a bad seed or a value out of
@@ -169,6 +225,7 @@ def check_config(cfg: Any) -> Any:
     """
     cfg = _walk(cfg, "")
     check_bounds(cfg)
+    check_phase_waits(cfg.assembly)
     check_seed("seed", cfg.seed)
     check_seed("reproduce.eval_seed", cfg.reproduce.eval_seed)
     for i, seed in enumerate(cfg.reproduce.train_seeds):

@@ -96,7 +96,8 @@ def run_cli(argv: list[str], delay: float) -> None:
     install(delay)
     from vgs.cli import main
 
-    sys.exit(main(argv))
+    sys.argv = ["vgs", *argv]  # as the command line runs it (vgs.cli.main's signal handling)
+    sys.exit(main())
 
 
 def use_fake_physics(monkeypatch: Any) -> None:

@@ -11,6 +11,7 @@ import pandas as pd
 import pytest
 
 from vgs.analysis.report import PAPER, build_report, efficiency_gain
+from vgs.config import profile, to_dict
 from vgs.errors import ConfigError
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "report_small"
@@ -129,7 +130,8 @@ def test_report_states_each_runs_own_wall_time(tmp_path: Path) -> None:
     run = tmp_path / "run"
     shutil.copytree(DATA, run)
     (run / "reproduce.json").write_text(json.dumps(
-        {"profile": "paper-light", "stage_wall_s": {"train": 1800.0, "evaluate": 5400.0}}))
+        {"profile": "paper-light", "config": to_dict(profile("paper-light")),
+         "stage_wall_s": {"train": 1800.0, "evaluate": 5400.0}}))
     for mode, wall in (("baseline", 0.6), ("vgs", 1.8)):
         rows = [{c: "" for c in CSV_COLUMNS} | {
             "episode": i, "mode": mode, "seed": i, "epsilon": 0.5, "explored": "True",
@@ -140,7 +142,7 @@ def test_report_states_each_runs_own_wall_time(tmp_path: Path) -> None:
         folder = run / "train" / f"{mode}_s0"
         folder.mkdir(parents=True)
         (folder / "run.json").write_text(json.dumps(
-            {"mode": mode, "config": {"agent": {"random_episodes": 1000}}}))
+            {"mode": mode, "config": to_dict(profile("paper-light"))}))
         pd.DataFrame(rows, columns=list(CSV_COLUMNS)).to_csv(folder / "episodes.csv",
                                                              index=False)
     text = build_report(run).read_text()

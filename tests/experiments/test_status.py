@@ -17,7 +17,8 @@ from vgs.runfolder.journal import encode_row
 from vgs.runfolder.layout import eval_jobs, train_runs
 from vgs.runfolder.status import eval_progress, folder_status, format_status, train_progress
 
-COLUMNS = ("episode", "mode", "grasp_success", "assembly_success", "assembly_time_s", "wall_s")
+COLUMNS = ("episode", "mode", "seed", "grasp_success", "assembly_success", "assembly_time_s",
+           "wall_s")
 
 
 def _config():
@@ -28,6 +29,12 @@ def _config():
                    reproduce=replace(cfg.reproduce, conditions=("nominal",), sweep_offsets=0))
 
 
+def _eval_meta(episodes: int) -> str:
+    """An evaluation's meta.json (vgs.runfolder.schema)."""
+    return json.dumps({"policy": "center", "condition": "nominal", "episodes": episodes,
+                       "seed": 0, "config": to_dict(_config())})
+
+
 def _train_run(folder: Path, cfg, walls: list[float], converged: bool = False) -> None:
     folder.mkdir(parents=True)
     (folder / "run.json").write_text(json.dumps({"mode": "vgs", "config": to_dict(cfg)}))
@@ -35,7 +42,7 @@ def _train_run(folder: Path, cfg, walls: list[float], converged: bool = False) -
         writer = csv.DictWriter(fh, fieldnames=COLUMNS)
         writer.writeheader()
         for i, wall in enumerate(walls):
-            writer.writerow({"episode": i, "mode": "vgs", "grasp_success": 1,
+            writer.writerow({"episode": i, "mode": "vgs", "seed": i, "grasp_success": 1,
                              "assembly_success": i % 2, "assembly_time_s": 20.0,
                              "wall_s": wall})
     # checkpoint_every = 4; a finished run checkpoints its last episode
@@ -66,7 +73,7 @@ def test_finished_training_run(tmp_path: Path) -> None:
 def test_evaluation_with_a_torn_journal_line(tmp_path: Path) -> None:
     out = tmp_path / "eval"
     out.mkdir()
-    (out / "meta.json").write_text(json.dumps({"episodes": 5}))
+    (out / "meta.json").write_text(_eval_meta(5))
     rows = [{"index": i, "success": i != 1, "wall_s": 3.0} for i in range(3)]
     (out / "journal.jsonl").write_text("".join(encode_row(r) for r in rows) + '{"ind')
     p = eval_progress(out)
@@ -77,7 +84,7 @@ def test_evaluation_with_a_torn_journal_line(tmp_path: Path) -> None:
 def test_evaluation_with_all_episodes_in_but_no_tables_yet(tmp_path: Path) -> None:
     out = tmp_path / "eval"
     out.mkdir()
-    (out / "meta.json").write_text(json.dumps({"episodes": 2}))
+    (out / "meta.json").write_text(_eval_meta(2))
     (out / "journal.jsonl").write_text(
         "".join(encode_row({"index": i, "success": True, "wall_s": 1.0}) for i in (0, 1)))
     p = eval_progress(out)
@@ -100,7 +107,7 @@ def test_reproduction_folder(tmp_path: Path) -> None:
     _train_run(runs[1].folder, cfg, [1.0] * 3)
     done_job = eval_jobs(cfg, out)[-1]  # the centre heuristic
     done_job.folder.mkdir(parents=True)
-    (done_job.folder / "meta.json").write_text(json.dumps({"episodes": 5}))
+    (done_job.folder / "meta.json").write_text(_eval_meta(5))
     (done_job.folder / "journal.jsonl").write_text(
         "".join(encode_row({"index": i, "success": True, "wall_s": 1.0})
                 for i in range(5)))
@@ -144,7 +151,7 @@ def test_status_does_not_import_torch(tmp_path: Path) -> None:
     """Instant while a run works: ``vgs status`` never loads torch or a checkpoint."""
     import subprocess
 
-    (tmp_path / "meta.json").write_text(json.dumps({"episodes": 5}))
+    (tmp_path / "meta.json").write_text(_eval_meta(5))
     code = ("import sys; from vgs.cli import main; "
             f"assert main(['status', {str(tmp_path)!r}]) == 0; "
             "assert 'torch' not in sys.modules")

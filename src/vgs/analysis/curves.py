@@ -41,7 +41,7 @@ def load_episodes(run_dir: Path) -> tuple[pd.DataFrame, dict]:
         raise ConfigError("run_dir", f"{run_dir} holds no training run (episodes.csv, run.json)")
     from vgs.runfolder.common import read_json, read_table
 
-    return read_table(table), read_json(meta)
+    return read_table(table, "train"), read_json(meta)
 
 
 def skipped(df: pd.DataFrame) -> pd.Series:

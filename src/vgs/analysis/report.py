@@ -53,7 +53,13 @@ from vgs.checkpoint import atomic_write_text  # noqa: E402
 from vgs.columns import rounded  # noqa: E402
 from vgs.config import CONDITIONS  # noqa: E402
 from vgs.errors import ConfigError  # noqa: E402
-from vgs.runfolder.common import duration_text, read_json, read_table, short_revision  # noqa: E402
+from vgs.runfolder.common import (  # noqa: E402
+    check_table_written,
+    duration_text,
+    read_json,
+    read_table,
+    short_revision,
+)
 from vgs.runfolder.layout import eval_tables, holds_network, train_folders  # noqa: E402
 
 
@@ -93,7 +99,9 @@ def load_results(out: Path) -> pd.DataFrame:
     if not tables:
         raise ConfigError("report", f"no evaluation results under {out / 'eval'} "
                                     "(expected eval/<policy>/<condition>/episodes.parquet)")
-    return pd.concat([read_table(t) for t in tables], ignore_index=True)
+    for t in tables:
+        check_table_written(t)  # the table its evaluation wrote, not a changed one
+    return pd.concat([read_table(t, "eval") for t in tables], ignore_index=True)
 
 
 def load_center(folder: Path, tests: pd.DataFrame) -> pd.DataFrame:
@@ -237,7 +245,7 @@ def _training_rows(out: Path) -> list[list[str]]:
         csv_path = run / "episodes.csv"
         if not csv_path.exists():
             continue
-        ep = read_table(csv_path)
+        ep = read_table(csv_path, "train")
         last = ep.tail(max(1, len(ep) // 5))
         threshold = read_json(run / "threshold.json").get("threshold_s") \
             if (run / "threshold.json").exists() else None
@@ -278,7 +286,9 @@ def build_report(out: Path, title: str | None = None, center: Path | None = None
         ConfigError: If ``out`` holds no evaluation results, or ``center`` no centre evaluation
             of the same test scenes.
     """
+    meta = read_json(out / "reproduce.json") if (out / "reproduce.json").exists() else {}
     df = load_results(out)
+    _check_inputs(out)  # every file read below, before anything is written
     from vgs.analysis.makeup import makeups, write_makeup, write_regret
 
     centre = load_center(center, df) if center is not None else None
@@ -286,13 +296,14 @@ def build_report(out: Path, title: str | None = None, center: Path | None = None
     figures.mkdir(parents=True, exist_ok=True)
     table = results_table(df)
     rounded(table).to_csv(out / "results.csv", index=False)  # times to the ms
-    meta = read_json(out / "reproduce.json") if (out / "reproduce.json").exists() else {}
 
     if title is None:
         title = "VGS reproduction report" + (f" ({meta['profile']} profile)"
                                              if meta.get("profile") else "")
     doc = Doc(out)
     doc.h(1, title)
+    if gaps := missing_evaluations(out, meta, df):
+        doc.p("**Not in this report, or only in part**: " + "; ".join(gaps) + ".")
     _provenance_section(doc, out, df, meta)
     _reading_section(doc, df)
     _headline_section(doc, df, table, meta)
@@ -316,6 +327,51 @@ def build_report(out: Path, title: str | None = None, center: Path | None = None
     return out / "report.md"
 
 
+def missing_evaluations(out: Path, meta: dict[str, Any], df: pd.DataFrame) -> list[str]:
+    """What the reproduction in ``out`` planned (its ``reproduce.json``, ``meta``) that its
+    merged tables ``df`` lack: a policy on a condition without a table, with fewer rows than
+    planned, or without the ``summary.json`` that marks it finished. Empty without a
+    ``reproduce.json`` (a folder of tables is read as it is)."""
+    if not meta:
+        return []
+    from vgs.runfolder.layout import eval_jobs
+    from vgs.runfolder.status import recorded_config
+
+    cfg = recorded_config(out / "reproduce.json", meta["config"])
+    planned: dict[tuple[str, str], int] = {}
+    for job in eval_jobs(cfg, out):
+        key = (job.label, job.condition)
+        planned[key] = planned.get(key, 0) + cfg.eval.episodes
+    counts = df.groupby(["policy", "condition"]).size().to_dict() if len(df) else {}
+    gaps = []
+    for (label, condition), n in planned.items():
+        got = int(counts.get((label, condition), 0))
+        where = f"eval/{label}/{condition}"
+        if not got:
+            gaps.append(f"{label} on {condition} (no table in {where})")
+        elif got < n:
+            gaps.append(f"{label} on {condition} ({got} of {n} test episodes in {where})")
+        elif not (out / where / "summary.json").exists():
+            gaps.append(f"{label} on {condition} (unfinished: {where} has no summary.json)")
+    return gaps
+
+
+def _check_inputs(out: Path) -> None:
+    """Read (and so check against their schemas) the training runs' ``run.json`` and
+    ``episodes.csv`` and the evaluations' ``meta.json`` that the report uses.
+
+    Raises:
+        CorruptFileError: Naming the first damaged file.
+    """
+    for run in sorted((out / "train").glob("*")):
+        if (run / "run.json").exists():
+            read_json(run / "run.json")
+        if (run / "episodes.csv").exists():
+            read_table(run / "episodes.csv", "train")
+    for meta in sorted((out / "eval").glob("**/meta.json")):
+        read_json(meta)
+
+
 def _provenance_section(doc: Doc, out: Path, df: pd.DataFrame, meta: dict[str, Any]) -> None:
     """How the run was made: command, machine, revision, engine, wall times, shortcuts."""
     tested = [provenance_text(read_json(m).get("provenance"))
@@ -337,7 +393,7 @@ def _provenance_section(doc: Doc, out: Path, df: pd.DataFrame, meta: dict[str, A
             doc.p("Wall time per stage: " + ", ".join(
                 f"{k} {duration_text(v)}" for k, v in stages.items())
                 + f" ({duration_text(sum(stages.values()))} in all).")
-        own = {run.name: read_table(run / "episodes.csv")["wall_s"].sum() / 3600.0
+        own = {run.name: read_table(run / "episodes.csv", "train")["wall_s"].sum() / 3600.0
                for run in train_folders(out) if (run / "episodes.csv").exists()}
         if own:
             doc.p("Each training run's own wall time, the sum of its table's `wall_s` (it "
@@ -491,7 +547,7 @@ def _training_section(doc: Doc, out: Path, figures: Path) -> None:
 
         curves = figures / "learning_curves.png"
         plot_curves(runs, curves, window=max(5, min(50, len(read_table(
-            runs[0] / "episodes.csv")) // 8)))
+            runs[0] / "episodes.csv", "train")) // 8)))
         doc.img(curves, "Learning curves (moving means) and grasp offsets during training")
         from vgs.analysis.heatmap import plot_heatmaps
 

@@ -66,6 +66,10 @@ def cmd_report(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     """Build DIR/report.md and DIR/report.html from the results in DIR."""
     from vgs.analysis.report import build_report
 
+    if args.publish:  # before anything is written
+        from vgs.tools.publish import check_dest
+
+        check_dest(Path(args.dir), Path(args.publish))
     path = build_report(Path(args.dir), **({"title": args.title} if args.title else {}),
                         center=Path(args.center) if args.center else None)
     print(f"wrote {path} and {path.with_suffix('.html')}")

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import ast
 import os
+import re
 from dataclasses import is_dataclass
 from pathlib import Path
 from typing import Any, NoReturn
@@ -18,9 +19,10 @@ from vgs.config import (
     profile,
     read_config_file,
 )
+from vgs.config.checks import shown
 from vgs.errors import ConfigError, VGSError
 from vgs.runfolder.folderkind import MARKERS
-from vgs.validate import check_config
+from vgs.validate import BOUNDS, MAX_EPISODES, MAX_SEED, bound_text, check_config
 
 # Flag -> dotted configuration path. Values are SI (m, kg, N).
 OVERRIDE_FLAGS: dict[str, str] = {
@@ -31,6 +33,49 @@ OVERRIDE_FLAGS: dict[str, str] = {
     "hole_depth": "cell.hole.depth",
     "gripper_force": "cell.gripper.force",
 }
+
+
+# Every number a flag takes (argparse dest -> (lowest, highest), unit), checked before any work
+# (the cell flags of OVERRIDE_FLAGS take the bound of their configuration key in BOUNDS).
+FLAG_BOUNDS: dict[str, tuple[float, float, str]] = {
+    "seed": (0, MAX_SEED, ""),
+    "episodes": (1, MAX_EPISODES, ""),
+    "workers": (1, BOUNDS["train.parallel_episodes"][1], ""),
+    "offsets": (1, BOUNDS["reproduce.sweep_offsets"][1], ""),
+    "trials": (1, BOUNDS["reproduce.sweep_trials"][1], ""),
+    "mass_range": (0.0, 0.9, ""),
+    "length_range": (0.0, 0.9, ""),
+    "offset": (-250.0, 250.0, " mm"),
+    "video_fps": (1.0, 60.0, " frames/s"),
+    "video_speed": (0.1, 1000.0, " simulated s per s"),
+    "videos": (0, MAX_EPISODES, ""),
+    "traces": (0, MAX_EPISODES, ""),
+    "rotations": (*BOUNDS["network.num_rotations"], ""),
+    "size": (*BOUNDS["cell.camera.size"], " px"),
+    "scenes": (1, 16, ""),
+    "window": (1, MAX_EPISODES, " episodes"),
+}
+
+
+def check_flag_bounds(args: argparse.Namespace) -> None:
+    """Every number given by a flag within its bound (:data:`FLAG_BOUNDS`, and :data:`BOUNDS`
+    for the cell flags).
+
+    Raises:
+        ConfigError: ``--flag``, naming the bound.
+    """
+    for dest, value in sorted(vars(args).items()):
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            continue
+        if dest in OVERRIDE_FLAGS:
+            low, high, unit = (*BOUNDS[OVERRIDE_FLAGS[dest]], "")
+        elif dest in FLAG_BOUNDS:
+            low, high, unit = FLAG_BOUNDS[dest]
+        else:
+            continue
+        if not low <= value <= high:
+            raise ConfigError(f"--{dest.replace('_', '-')}",
+                              f"must lie in {bound_text(low, high)}{unit}, got {shown(value)}")
 
 
 class UsageError(VGSError):
@@ -44,12 +89,53 @@ class CommandParser(argparse.ArgumentParser):
         raise UsageError(message)
 
 
-def parse_value(text: str) -> Any:
-    """A Python literal if ``text`` is one, else the text itself."""
+MAX_LITERAL_CHARS = 4096  # a --set value: the longest configuration value is ~200 characters
+MAX_LITERAL_DEPTH = 32  # brackets and unary operators (-, +, ~, not) nested in a --set value
+
+
+def literal_depth(text: str) -> int:
+    """An upper bound of the nesting Python's parser recurses into for ``text``: the deepest
+    brackets plus the longest chain of unary operators (``-``, ``+``, ``~``, ``not``), quoted
+    text left out."""
+    bare = _QUOTED.sub("''", text)
+    depth = deepest = 0
+    for char in bare:
+        if char in "([{":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif char in ")]}":
+            depth = max(0, depth - 1)
+    chains = [len(_UNARY_OP.findall(m.group())) for m in _UNARY_CHAIN.finditer(bare)]
+    return deepest + max(chains, default=0)
+
+
+_QUOTED = re.compile(r"'[^']*'|\"[^\"]*\"")
+_UNARY_OP = re.compile(r"[-+~]|\bnot\b")
+_UNARY_CHAIN = re.compile(r"(?:(?:[-+~]|\bnot\b)\s*)+")
+
+
+def parse_value(text: str, key: str = "set") -> Any:
+    """A Python literal if ``text`` is one, else the text itself.
+
+    The text is bounded before it is parsed (Python's parser recurses into nested brackets
+    and unary operators, and a long literal can exhaust memory).
+
+    Raises:
+        ConfigError: ``key`` when the text is longer than :data:`MAX_LITERAL_CHARS` or nested
+            deeper than :data:`MAX_LITERAL_DEPTH`.
+    """
+    if len(text) > MAX_LITERAL_CHARS:
+        raise ConfigError(key, f"the value is {len(text)} characters long; at most "
+                               f"{MAX_LITERAL_CHARS}")
+    if literal_depth(text) > MAX_LITERAL_DEPTH:
+        raise ConfigError(key, f"the value nests brackets or signs (-, +, ~, not) more than "
+                               f"{MAX_LITERAL_DEPTH} deep")
     try:
         return ast.literal_eval(text)
-    except (ValueError, SyntaxError):
+    except (ValueError, SyntaxError, TypeError):
         return text
+    except (RecursionError, MemoryError):  # what the bounds above should already keep out
+        raise ConfigError(key, "the value is too large or too deeply nested to parse") from None
 
 
 def _current(cfg: Any, path: str) -> Any:
@@ -70,6 +156,10 @@ def apply_override(cfg: ExperimentConfig, path: str, value: Any) -> ExperimentCo
     if isinstance(value, str) and isinstance(_current(cfg, path), tuple):
         items = value.strip().strip("()[]").split(",")
         value = tuple(parse_value(item.strip()) for item in items if item.strip())
+    bound = BOUNDS.get(path)
+    if bound is not None and isinstance(value, (int, float)) and not isinstance(value, bool) \
+            and not bound[0] <= value <= bound[1]:  # named before the dataclass's own check
+        raise ConfigError(path, f"must lie in {bound_text(*bound)}, got {shown(value)}")
     try:
         return override(cfg, path, value)
     except ConfigError as exc:
@@ -116,15 +206,19 @@ def config_from_args(args: argparse.Namespace) -> ExperimentConfig:
         if value is not None:
             cfg = apply_override(cfg, path, value)
     sections = getattr(args, "config_sections", None)
+    seen: set[str] = set()
     for pair in args.set:
         key, sep, text = pair.partition("=")
         key = key.strip()
         if not sep or not key:
-            raise ConfigError("set", f"expected key=value, got {pair!r}")
+            raise ConfigError("set", f"expected key=value, got {shown(pair)}")
+        if key in seen:
+            raise ConfigError(key, "is given twice with --set; give each key once")
+        seen.add(key)
         if sections and key.split(".")[0] not in sections:
             raise ConfigError("set", f"vgs {args.command} uses only the keys "
                                      f"{', '.join(f'{name}.*' for name in sections)}, not {key}")
-        cfg = apply_override(cfg, key, parse_value(text.strip()))
+        cfg = apply_override(cfg, key, parse_value(text.strip(), key))
     cfg = check_config(cfg)  # types (True is not a mass) and seeds
     check_hole_fits(cfg)
     return cfg
@@ -191,6 +285,9 @@ def parse_offsets_mm(text: str) -> tuple[float, ...]:
             from exc
     if not values:
         raise ConfigError("offsets", "no offsets given")
+    if len(values) > FLAG_BOUNDS["offsets"][1]:
+        raise ConfigError("offsets-mm", f"{len(values)} offsets; at most "
+                                        f"{FLAG_BOUNDS['offsets'][1]:g}")
     return values
 
 

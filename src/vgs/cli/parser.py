@@ -25,6 +25,7 @@ from vgs.cli.folders import (
 from vgs.cli.options import (
     CommandParser,
     UsageError,
+    check_flag_bounds,
     config_from_args,
     seed_arg,
 )
@@ -414,10 +415,17 @@ def _backend_flags(p: argparse.ArgumentParser, what: str = "") -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``vgs`` command; return its exit code.
 
+    The first SIGINT, SIGTERM or SIGHUP stops the command (one line, exit code 130, 143 or
+    129); every later one is ignored while it shuts down. Called from the command line
+    (``argv`` None) an interrupted command keeps ignoring them until the process exits, so a
+    second signal cannot end it by the signal or with a traceback; called with ``argv`` (in
+    another program) the handlers it replaced are restored on return.
+
     Args:
         argv: Arguments without the program name (default: ``sys.argv[1:]``).
     """
     args = None
+    interrupted = False
     handlers = _catch_termination()
     try:
         args, extra = build_parser().parse_known_args(argv)
@@ -425,6 +433,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise UsageError(f"{args.command}: does not take {' '.join(extra)} (vgs "
                              f"{args.command} --help lists what it takes)")
         check_paths(args)  # before any work
+        check_flag_bounds(args)
         cfg = config_from_args(args) if hasattr(args, "profile") else None
         return args.func(args, cfg)
     except VGSError as exc:
@@ -436,10 +445,13 @@ def main(argv: Sequence[str] | None = None) -> int:
             return 1
         # A file or folder the command cannot use: an --out that is a file, a full disk, no
         # permission. The run's files are as the last completed write left them.
-        where = f"{exc.filename}: " if exc.filename else ""
+        # (a write to an open file names none: the folder the command writes into is named)
+        path = exc.filename or getattr(args, "out", None) or getattr(args, "publish", None)
+        where = f"{path}: " if path else ""
         return _error(f"{where}{exc.strerror or exc}")
     except KeyboardInterrupt as exc:
-        signal.signal(signal.SIGINT, signal.SIG_IGN)  # one line, however often it is pressed
+        interrupted = True
+        _ignore_signals()  # one line, however often it is pressed (the handler did it already)
         command = getattr(args, "command", None)
         again = ("; run the same command again to resume (finished episodes are kept)"
                  if command in RESUMABLE else "")
@@ -449,26 +461,39 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"vgs: interrupted{again}", file=sys.stderr)
         return 130
     finally:
-        for signum, handler in handlers.items():
-            signal.signal(signum, handler)
+        if argv is not None or not interrupted:
+            for signum, handler in handlers.items():
+                signal.signal(signum, handler)
+
+
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+
+
+def _ignore_signals() -> None:
+    """Ignore SIGINT, SIGTERM and SIGHUP (in the main thread; elsewhere nothing changes)."""
+    if threading.current_thread() is threading.main_thread():
+        for signum in STOP_SIGNALS:
+            signal.signal(signum, signal.SIG_IGN)
 
 
 def _catch_termination() -> dict[int, Any]:
     """Handle SIGTERM and SIGHUP like Ctrl-C (:class:`vgs.errors.InterruptedBySignal`): the
     command stops its workers and ends with one line and exit code 128 + signal (143 for
-    SIGTERM). Returns the handlers it replaced (none outside the main thread)."""
+    SIGTERM). The first of SIGINT, SIGTERM and SIGHUP stops the command and makes every later
+    one ignored (a second Ctrl-C during the shutdown changes nothing). Returns the handlers it
+    replaced (none outside the main thread)."""
     if threading.current_thread() is not threading.main_thread():
         return {}
 
     def stop(signum: int, frame: Any) -> None:
-        for name in (signal.SIGTERM, signal.SIGHUP):  # the first signal stops, later ones wait
-            signal.signal(name, signal.SIG_IGN)
+        _ignore_signals()  # the first signal stops, later ones wait
+        if signum == signal.SIGINT:
+            raise KeyboardInterrupt
         raise InterruptedBySignal(signum)
 
     old = {}
-    for signum in (signal.SIGTERM, signal.SIGHUP):
+    for signum in STOP_SIGNALS:
         old[signum] = signal.signal(signum, stop)
-    old[signal.SIGINT] = signal.getsignal(signal.SIGINT)
     return old
 
 

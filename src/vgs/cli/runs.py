@@ -191,8 +191,8 @@ def cmd_evaluate(args: argparse.Namespace, cfg: ExperimentConfig) -> int:
     for flag in ("videos", "traces"):  # before the evaluation, not after it
         count = getattr(args, flag)
         if not 0 <= count <= episodes:
-            raise ConfigError(flag, f"must be within 0-{episodes} (the episodes evaluated), "
-                                    f"got {count}")
+            raise ConfigError(f"--{flag}", f"must lie in [0, {episodes}] (the episodes "
+                                           f"evaluated), got {count}")
     if args.videos:
         headless_gl_default()  # before anything imports mujoco
         from vgs.render import require_gl

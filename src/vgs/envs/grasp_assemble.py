@@ -87,7 +87,12 @@ def make_config(cfg: ExperimentConfig | str | None,
     elif not isinstance(cfg, ExperimentConfig):
         raise ConfigError("cfg", f"expected a profile name or an ExperimentConfig, got "
                                  f"{type(cfg).__name__}")
+    if overrides is not None and not isinstance(overrides, Mapping):
+        raise ConfigError("overrides", f"expected a mapping of dotted paths to values, e.g. "
+                                       f"{{'cell.peg.mass': 0.6}}, got {type(overrides).__name__}")
     for path, value in (overrides or {}).items():
+        if not isinstance(path, str):
+            raise ConfigError("overrides", f"a key must be a dotted path, got {path!r:.40}")
         try:
             cfg = override(cfg, path, value)
         except (TypeError, ValueError, OverflowError) as exc:

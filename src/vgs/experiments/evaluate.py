@@ -50,7 +50,14 @@ from vgs.config import CONDITIONS, ExperimentConfig, PegConfig, eval_scenes, to_
 from vgs.errors import ConfigError, CorruptFileError, RunMismatchError
 from vgs.rollout.episodepool import BACKENDS, EpisodeTask, run_local, run_ray, task_row
 from vgs.rollout.policies import EvalPolicy, load_policy, policy_digest, policy_label
-from vgs.runfolder.common import check_request, locked, provenance, read_json, write_json
+from vgs.runfolder.common import (
+    check_request,
+    locked,
+    provenance,
+    read_json,
+    table_digests,
+    write_json,
+)
 from vgs.runfolder.folderkind import claim
 from vgs.runfolder.journal import encode_row, read_journal
 from vgs.validate import MAX_EPISODES, check_config, check_seed
@@ -167,7 +174,7 @@ def _finish(spec: EvalSpec, out: Path, rows: dict[int, dict[str, Any]]) -> pd.Da
     # summary.json, which marks the evaluation finished, comes last.
     write_tables(df, out)
     write_json(out / "summary.json", {"policy": label, "condition": spec.condition,
-                                      **summarize(df)})
+                                      **summarize(df), "tables_sha256": table_digests(out)})
     return df
 
 

@@ -45,11 +45,14 @@ from vgs.errors import ConfigError, CorruptFileError
 from vgs.experiments.evaluate import EvalSpec, evaluate_many, write_tables
 from vgs.experiments.train import train
 from vgs.runfolder.common import (
+    check_belongs,
     check_request,
+    check_table_digest,
     locked,
     provenance,
     read_json,
     read_table,
+    table_digests,
     write_json,
 )
 from vgs.runfolder.folderkind import claim
@@ -166,13 +169,41 @@ class Reproduction:
         self._stage("train", t0)
 
     def _trained(self, folder: Path) -> bool:
+        """Whether the training run in ``folder`` has finished; a finished one must be the run
+        this reproduction's slot asks for (:meth:`_check_slot`)."""
         table = folder / "episodes.csv"
         if not table.exists() or not (folder / "convergence.json").exists():
             return False
-        try:
-            return len(pd.read_csv(table)) >= self.cfg.train.episodes
-        except (ValueError, UnicodeDecodeError):  # unreadable: train() says what is wrong
-            return False
+        self._check_slot(folder)
+        return len(read_table(table, "train")) >= self.cfg.train.episodes
+
+    def _check_slot(self, folder: Path) -> None:
+        """The finished run in ``folder`` against its slot: ``run.json`` of the slot's mode and
+        of this reproduction's configuration with the slot's seed, its checkpoint that run's
+        (:func:`vgs.runfolder.common.check_belongs`), its table the rows the checkpoint saw.
+
+        Raises:
+            RunMismatchError: Naming the first field that differs.
+            CorruptFileError: If a file is damaged or belongs to another run.
+        """
+        from vgs.checkpoint import read_meta
+        from vgs.errors import RunMismatchError
+
+        slot = next(run for run in train_runs(self.cfg, self.out) if run.folder == folder)
+        meta_path = folder / "run.json"
+        if not meta_path.exists():
+            raise CorruptFileError(meta_path, "is missing beside a finished table; restore it")
+        meta = read_json(meta_path)
+        if meta["mode"] != slot.mode:
+            raise RunMismatchError("mode", f"{folder} holds a {meta['mode']} run, not the "
+                                           f"{slot.mode} run of this slot")
+        check_request(meta["config"], replace(self.cfg, seed=slot.seed), meta_path,
+                      extendable=("eval.episodes",))
+        ckpt = folder / "checkpoint.pt"
+        if ckpt.exists():
+            saved = read_meta(ckpt)
+            check_belongs(saved.get("run"), meta, ckpt, meta_path)
+            check_table_digest(folder / "episodes.csv", ckpt, saved)
 
     def _evaluate_unlocked(self) -> None:
         """Stage 2: every policy on every condition.
@@ -200,7 +231,7 @@ class Reproduction:
     def _merge(self, label: str, condition: str) -> None:
         """``eval/<label>/<condition>/episodes.parquet``: the tables of all training seeds."""
         parts = sorted((self.out / "eval" / label).glob(f"s*/{condition}/episodes.parquet"))
-        df = pd.concat([read_table(p).assign(train_run=p.parent.parent.name)
+        df = pd.concat([read_table(p, "eval").assign(train_run=p.parent.parent.name)
                         for p in parts], ignore_index=True)
         if len(parts) > 1:  # several training seeds: keep the index unique per seed
             df["index"] = range(len(df))
@@ -208,6 +239,7 @@ class Reproduction:
         dest.mkdir(parents=True, exist_ok=True)
         write_tables(df, dest)
         write_json(dest / "summary.json", {"policy": label, "condition": condition,
+                                           "tables_sha256": table_digests(dest),
                                            **summarize(df)})
 
     def _sweep_unlocked(self) -> None:

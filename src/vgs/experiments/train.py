@@ -71,7 +71,7 @@ from vgs.grasping.replay import Renderer, ReplayBuffer, Transition, cache_size_f
 from vgs.grasping.rewards import MODES, episode_reward, next_threshold
 from vgs.rollout.episodepool import BACKENDS, GraspTask, TrainingPool
 from vgs.rollout.policies import finished_as_policy, pixel_command
-from vgs.runfolder.common import locked, write_json
+from vgs.runfolder.common import check_belongs, locked, read_json, run_identity, write_json
 from vgs.runfolder.folderkind import claim
 from vgs.runfolder.trainfolder import (
     RECORD_COLUMNS,
@@ -184,6 +184,9 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
         if state.episode > total:
             raise CorruptFileError(ckpt, f"is at episode {state.episode}, beyond the run's "
                                          f"{total}")
+    run_meta = new_meta if new_meta is not None else read_json(out / "run.json")
+    check_belongs(state.run, run_meta, ckpt, out / "run.json")  # not another run's checkpoint
+    state.run = run_identity(run_meta)
     if cfg.reward.threshold_s is not None:
         state.threshold = cfg.reward.threshold_s
     rows = read_rows(out / "episodes.csv", cfg, mode, state.episode, state.table_sha256)
@@ -191,7 +194,8 @@ def _train(cfg: ExperimentConfig, mode: str, out: Path, device: str, progress: b
         write_json(out / "run.json", new_meta)
 
     log = _TrainLog(out, rows, mode, state.episode, total, progress, position)
-    log.writer.add_text("config", config_text(cfg, mode), state.episode)
+    if log.writer is not None:
+        log.writer.add_text("config", config_text(cfg, mode), state.episode)
     source = _EpisodeSource(cfg, agent, runner, rng, schedule, backend, ray_address,
                             lambda: _assembly_plan(cfg, mode, state))
     try:
@@ -362,7 +366,9 @@ class _TrainLog:
         from torch.utils.tensorboard import SummaryWriter
 
         self.out, self.mode, self.total = out, mode, total
-        self.writer = SummaryWriter(str(out / "tensorboard"), purge_step=start)
+        # (a finished run run again gets no new events file: its folder stays as it is)
+        self.writer = (SummaryWriter(str(out / "tensorboard"), purge_step=start)
+                       if start < total else None)
         self.csv_file, self.table = open_table(out / "episodes.csv", rows)
         self.bar = tqdm(range(start, total), initial=start, total=total, desc=f"train {mode}",
                         disable=not progress, dynamic_ncols=True, position=position)
@@ -413,4 +419,5 @@ class _TrainLog:
 
     def close(self) -> None:
         self.csv_file.close()
-        self.writer.close()
+        if self.writer is not None:
+            self.writer.close()

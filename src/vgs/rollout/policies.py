@@ -122,7 +122,7 @@ def load_trained_agent(run_dir: Path, device: str = "cpu", field: str = "policy"
             :class:`vgs.errors.CheckpointError` if the checkpoint is refused.
     """
     from vgs.grasping.agent import GraspAgent
-    from vgs.runfolder.common import read_json
+    from vgs.runfolder.common import check_belongs, check_table_digest, read_json
     from vgs.runfolder.trainfolder import load_checkpoint
     from vgs.validate import check_config
 
@@ -138,7 +138,11 @@ def load_trained_agent(run_dir: Path, device: str = "cpu", field: str = "policy"
         raise CorruptFileError(meta_path, f"records no usable configuration ({exc})") from None
     agent = GraspAgent(run_cfg.network, run_cfg.agent, device=device, seed=run_cfg.seed)
     if ckpt.exists():
-        return run_cfg, meta, agent, load_checkpoint(ckpt, agent, device=device).episode
+        state = load_checkpoint(ckpt, agent, device=device)
+        check_belongs(state.run, meta, ckpt, meta_path)  # not another run's weights
+        check_table_digest(run_dir / "episodes.csv", ckpt,
+                           {"episode": state.episode, "table_sha256": state.table_sha256})
+        return run_cfg, meta, agent, state.episode
     return run_cfg, meta, agent, _load_policy_files(run_dir, meta, agent, device)
 
 

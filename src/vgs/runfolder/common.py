@@ -29,6 +29,7 @@ from vgs.errors import CorruptFileError, FolderBusyError, RunMismatchError
 from vgs.jsonsafe import dumps
 from vgs.revision import short_revision as short_revision  # re-exported for analysis/
 from vgs.revision import source_revision
+from vgs.runfolder.schema import check_json, check_table
 
 LOCK_NAME = ".lock"
 
@@ -38,13 +39,16 @@ def locked(folder: Path) -> Iterator[None]:
     """Hold ``folder/.lock`` (``fcntl.flock``, exclusive) while the block runs.
 
     The kernel drops the lock when the process ends, however it ends, so a killed run never
-    leaves a stale lock behind.
+    leaves a stale lock behind. A folder this call created is removed again when the block
+    fails before anything but the lock was written in it.
 
     Raises:
         FolderBusyError: If another process holds it.
     """
+    created = not folder.exists()
     folder.mkdir(parents=True, exist_ok=True)
     fd = os.open(folder / LOCK_NAME, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
+    ok = False
     try:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -57,14 +61,21 @@ def locked(folder: Path) -> Iterator[None]:
         os.ftruncate(fd, 0)
         os.write(fd, f"{os.getpid()}\n".encode())
         yield
+        ok = True
     finally:
+        if not ok and created and [p.name for p in folder.iterdir()] == [LOCK_NAME]:
+            # A command refused before it wrote anything leaves no folder behind.
+            (folder / LOCK_NAME).unlink(missing_ok=True)
+            with contextlib.suppress(OSError):
+                folder.rmdir()
         os.close(fd)  # releases the lock
 
 
 def read_json(path: Path, kind: type = dict) -> Any:
     """The JSON document in ``path``, which must be a ``kind``: a regular file (no symlink,
     device or FIFO) of at most 16 MiB, nested at most 32 deep
-    (:func:`vgs.checkpoint.read_regular`, :func:`vgs.checkpoint.loads_json`).
+    (:func:`vgs.checkpoint.read_regular`, :func:`vgs.checkpoint.loads_json`); a metadata file
+    of :data:`vgs.runfolder.schema.JSON_SCHEMAS` of its shape and types.
 
     Raises:
         CorruptFileError: If it is empty, not UTF-8, not JSON, not a ``kind``, a special file or
@@ -74,6 +85,7 @@ def read_json(path: Path, kind: type = dict) -> Any:
     if not isinstance(data, kind):
         raise CorruptFileError(path, f"holds a {type(data).__name__}, not a "
                                      f"{kind.__name__}")
+    check_json(path, data)  # run.json, meta.json, reproduce.json: their schema
     return data
 
 
@@ -125,6 +137,95 @@ def check_request(saved: dict[str, Any], cfg: Any, where: Path,
                                      f"({_get(old, path)!r}, not {_get(new, path)!r}); repeat "
                                      "the run's settings to resume it, or use a new folder")
     return grown
+
+
+def run_identity(meta: dict[str, Any]) -> dict[str, Any]:
+    """What names a training run (its ``run.json``, checked by
+    :mod:`vgs.runfolder.schema`): ``run_id`` (made when the run started; runs begun before
+    it have none), ``mode`` and ``seed``. Each checkpoint records it (``run``)."""
+    return {"run_id": meta.get("run_id"), "mode": meta["mode"], "seed": meta["config"]["seed"]}
+
+
+def check_belongs(recorded: Any, meta: dict[str, Any], path: Path, run_json: Path) -> None:
+    """A checkpoint's ``run`` record against the identity of the run whose ``run.json``
+    (``meta``) lies beside it: the same ``mode``, ``seed`` and ``run_id``. A checkpoint written
+    before checkpoints named their run (no record) and a run without ``run_id`` check what they
+    have.
+
+    Raises:
+        CheckpointError: Naming the field that differs.
+    """
+    from vgs.errors import CheckpointError
+
+    if recorded is None:
+        return
+    if not isinstance(recorded, dict):
+        raise CheckpointError(path, "records its run in a form this vgs does not know")
+    mine = run_identity(meta)
+    for key in ("mode", "seed", "run_id"):
+        if mine[key] is None or key not in recorded:
+            continue
+        if recorded[key] != mine[key]:
+            raise CheckpointError(path, f"{key}: belongs to another training run "
+                                        f"({str(recorded[key])[:40]!r}; {run_json.name} records "
+                                        f"{str(mine[key])[:40]!r}); restore the run's own "
+                                        "checkpoint, or train into a new folder")
+
+
+def check_table_digest(table: Path, ckpt: Path, saved: dict[str, Any]) -> None:
+    """The first rows of a training run's ``table`` against what its checkpoint ``ckpt``
+    recorded (metadata ``saved``): the header and the rows of its episodes must hash to its
+    ``table_sha256`` (checkpoints written before the hash: nothing to check).
+
+    Raises:
+        CorruptFileError: If they do not (another run's table, or a changed one).
+    """
+    import hashlib
+
+    digest = saved.get("table_sha256")
+    if digest is None:
+        return
+    data = read_regular(table, MAX_JOURNAL_BYTES) if table.exists() else b""
+    head = b"".join(data.splitlines(keepends=True)[:int(saved["episode"]) + 1])
+    if hashlib.sha256(head).hexdigest() != digest:
+        raise CorruptFileError(table, f"is not the table {ckpt.name} saw at episode "
+                                      f"{saved['episode']} (its SHA-256 differs): another "
+                                      "run's, or changed; restore it")
+
+
+TABLE_FILES = ("episodes.parquet", "episodes.csv")
+
+
+def table_digests(folder: Path) -> dict[str, str]:
+    """``{file name: SHA-256}`` of an evaluation's tables in ``folder`` (written into its
+    ``summary.json`` as ``tables_sha256``, so that a reader can tell the tables the evaluation
+    wrote from changed ones)."""
+    import hashlib
+
+    return {name: hashlib.sha256(read_regular(folder / name, MAX_JOURNAL_BYTES)).hexdigest()
+            for name in TABLE_FILES if (folder / name).exists()}
+
+
+def check_table_written(table: Path) -> None:
+    """An evaluation table against the SHA-256 its ``summary.json`` recorded
+    (``tables_sha256``; summaries written before it record none: nothing to check).
+
+    Raises:
+        CorruptFileError: If the table is not the one the evaluation wrote.
+    """
+    import hashlib
+
+    summary = table.parent / "summary.json"
+    if not summary.exists():
+        return
+    recorded = read_json(summary).get("tables_sha256")
+    if not isinstance(recorded, dict) or table.name not in recorded:
+        return
+    if hashlib.sha256(read_regular(table, MAX_JOURNAL_BYTES)).hexdigest() != recorded[table.name]:
+        raise CorruptFileError(table, "is not the table its evaluation wrote (its SHA-256 "
+                                      "differs from summary.json's): changed since; run the "
+                                      "evaluation (or vgs reproduce) again to rebuild it from "
+                                      "its journals")
 
 
 def _unknown(saved: dict[str, Any], known: dict[str, Any], prefix: str = "") -> str | None:
@@ -202,14 +303,18 @@ def _missing(value: Any) -> bool:
     return value is None or (isinstance(value, float) and value != value) or value == ""
 
 
-def read_table(path: Path) -> Any:
+def read_table(path: Path, kind: str | None = None) -> Any:
     """A results table (``.parquet`` or ``.csv``) as a pandas DataFrame, in the column
     vocabulary of :mod:`vgs.columns`: tables written before it (``docs/results``) have their
     legacy columns renamed and converted, and booleans written as 0/1 made booleans
     (:func:`vgs.columns.normalize`).
 
+    With ``kind`` (``train`` or ``eval``) the table is checked against its schema
+    (:func:`vgs.runfolder.schema.check_table`).
+
     Raises:
-        CorruptFileError: If the file cannot be parsed (truncated, not a table, not UTF-8).
+        CorruptFileError: If the file cannot be parsed (truncated, not a table, not UTF-8), or
+            is not of its ``kind``.
     """
     import pandas as pd
 
@@ -217,15 +322,16 @@ def read_table(path: Path) -> Any:
 
     check_regular(path, MAX_JOURNAL_BYTES)  # no symlink, device or FIFO; bounded
     try:
-        if path.suffix == ".parquet":
-            return normalize(pd.read_parquet(path))
-        return normalize(pd.read_csv(path))
+        df = normalize(pd.read_parquet(path) if path.suffix == ".parquet" else pd.read_csv(path))
     except OSError:
         raise
     except Exception as exc:  # noqa: BLE001 - pandas and pyarrow raise many kinds
         first = " ".join(str(exc).split())[:160]
         raise CorruptFileError(path, f"is not a readable table ({type(exc).__name__}: "
                                      f"{first})") from None
+    if kind is not None:
+        check_table(df, path, kind)
+    return df
 
 
 @functools.cache

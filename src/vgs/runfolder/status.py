@@ -25,9 +25,18 @@ from vgs import checkpoint
 from vgs.columns import as_bool
 from vgs.config import ExperimentConfig, from_dict
 from vgs.errors import ConfigError, CorruptFileError
-from vgs.runfolder.common import duration_text, engine_note, hosts_of, read_json, short_revision
+from vgs.runfolder.common import (
+    check_belongs,
+    check_table_digest,
+    duration_text,
+    engine_note,
+    hosts_of,
+    read_json,
+    short_revision,
+)
 from vgs.runfolder.journal import read_journal
 from vgs.runfolder.layout import eval_jobs, train_runs
+from vgs.runfolder.schema import check_header
 
 RATE_WINDOW = 50  # episodes behind a rate
 
@@ -120,14 +129,28 @@ def train_progress(folder: Path, name: str | None = None, total: int | None = No
     if table.exists():
         try:
             text = checkpoint.read_regular(table, checkpoint.MAX_JOURNAL_BYTES).decode("utf-8")
-            rows = [r for r in csv.DictReader(io.StringIO(text, newline=""))
-                    if r.get("wall_s") is not None]
+            reader = csv.DictReader(io.StringIO(text, newline=""))
+            rows = [r for r in reader if r.get("wall_s") is not None]
         except (UnicodeDecodeError, csv.Error) as exc:
             raise CorruptFileError(table, f"cannot be read ({exc})") from None
+        if text:  # (the table's schema: vgs.runfolder.schema)
+            check_header(list(reader.fieldnames or []), table, "train")
+        for i, row in enumerate(rows):  # episodes 0, 1, ... in order, as a resume checks
+            if row.get("episode") != str(i) or row.get("mode") != meta["mode"]:
+                raise CorruptFileError(table, f"holds {row.get('mode')!r} episode "
+                                              f"{str(row.get('episode'))[:20]!r} where the "
+                                              f"{meta['mode']} run's episode {i} belongs",
+                                       line=i + 2)
     ckpt = folder / "checkpoint.pt"
     saved = checkpoint.read_meta(ckpt) if ckpt.exists() else None  # refuses a bad one
-    at = int(saved.get("episode", 0)) if saved else 0
+    at = int(saved["episode"]) if saved else 0
+    if saved is not None:
+        check_belongs(saved.get("run"), meta, ckpt, meta_path)  # not another run's checkpoint
+        check_table_digest(table, ckpt, saved)
     done = len(rows)
+    if done < at:  # a resume refuses it too (vgs.runfolder.trainfolder.read_rows)
+        raise CorruptFileError(table, f"holds {done} episodes but {ckpt.name} is at episode "
+                                      f"{at}: the table is not the run's; restore it")
     # (a published copy keeps no checkpoint: its table tells)
     finished = (folder / "convergence.json").exists() and done >= total and (
         saved is None or at >= total)

@@ -9,6 +9,7 @@ from __future__ import annotations
 import csv
 import os
 import sys
+import uuid
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -55,6 +56,7 @@ class TrainState:
     exploration_times: list[float] | None = None
     rng_state: dict[str, Any] | None = None
     table_sha256: str | None = None
+    run: dict[str, Any] | None = None  # the run's identity (common.run_identity)
 
 
 def read_rows(path: Path, cfg: ExperimentConfig, mode: str, keep: int,
@@ -147,7 +149,7 @@ def save_checkpoint(path: Path, agent: GraspAgent, replay: ReplayBuffer, state: 
     meta = {"episode": state.episode, "threshold": state.threshold,
             "exploration_times": state.exploration_times, "rng_state": state.rng_state,
             "monitor": monitor.state_dict(), "agent": agent_state, "replay": replay_state,
-            "table_sha256": state.table_sha256}
+            "table_sha256": state.table_sha256, "run": state.run}
     newest = replay.newest()
     if replay.keeps_scenes and newest is not None:  # checked on resume (module docstring)
         scene = replay.scene(newest)
@@ -223,7 +225,7 @@ def load_checkpoint(path: Path, agent: GraspAgent, replay: ReplayBuffer | None =
             monitor.load_state_dict(meta["monitor"])
             torch.set_rng_state(tensors["torch_rng"].cpu())
         return TrainState(int(meta["episode"]), meta["threshold"], meta["exploration_times"],
-                          meta["rng_state"], meta.get("table_sha256"))
+                          meta["rng_state"], meta.get("table_sha256"), meta.get("run"))
     except ConfigError as exc:
         raise CheckpointError(path, f"does not fit this run ({exc})") from None
     except (KeyError, TypeError, ValueError, AttributeError, RuntimeError) as exc:
@@ -271,8 +273,10 @@ def check_start(cfg: ExperimentConfig, mode: str, out: Path, threads: int | None
         resumed = meta.get("resumed_with") if isinstance(meta.get("resumed_with"), list) else []
         now = provenance()
         new_versions = now != made and now not in resumed
-        if not grown and here in hosts and kept == run_threads and not new_versions:
+        if not grown and here in hosts and kept == run_threads and not new_versions \
+                and "run_id" in meta:
             return schedule, run_threads, None
+        meta.setdefault("run_id", uuid.uuid4().hex)  # (runs begun before it get one now)
         meta.update(config=to_dict(cfg), schedule_episodes=schedule, torch_threads=run_threads,
                     hosts=hosts + ([here] if here not in hosts else []))
         if new_versions:
@@ -283,7 +287,8 @@ def check_start(cfg: ExperimentConfig, mode: str, out: Path, threads: int | None
         raise CorruptFileError(meta_path, f"is missing but {out} holds {', '.join(leftovers)}; "
                                           "restore it or train into a new folder")
     return cfg.train.episodes, asked, {
-        "mode": mode, "config": to_dict(cfg), "schedule_episodes": cfg.train.episodes,
+        "mode": mode, "run_id": uuid.uuid4().hex, "config": to_dict(cfg),
+        "schedule_episodes": cfg.train.episodes,
         "torch_threads": asked, "git_revision": git_revision(),
         "python": sys.version.split()[0], "torch": torch.__version__, "hosts": [here],
         "provenance": provenance()}

@@ -265,6 +265,9 @@ def policy_panel(result: DemoResult, size: int, half: float = 0.08) -> np.ndarra
                   constant_values=255)
 
 
+MAX_VIDEO_BYTES = 2 * 2**30  # the frames of one video, held in memory until it is written
+
+
 def demo_video(result: DemoResult, cell: CellConfig, path: str | Path, fps: float = 15.0,
                speed: float = 4.0, width: int = 480, height: int = 360,
                hold_s: float = 1.5, panel: bool | None = None,
@@ -308,6 +311,12 @@ def demo_video(result: DemoResult, cell: CellConfig, path: str | Path, fps: floa
     if not trace.qpos:
         raise ConfigError("video", "the episode recorded no states")
     indices = frame_indices(np.asarray(trace.time), fps, speed)
+    frame_bytes = width * height * 3 * (2 if panel or result.q_map is not None else 1)
+    if (len(indices) + hold_s * fps) * frame_bytes > MAX_VIDEO_BYTES:
+        raise ConfigError("video", f"{len(indices)} frames of {width}x{height} px would hold "
+                                   f"{len(indices) * frame_bytes / 2**30:.1f} GiB; at most "
+                                   f"{MAX_VIDEO_BYTES / 2**30:g} GiB (a higher --video-speed or "
+                                   "a lower --video-fps)")
     mocap = np.array([*result.hole_xy, 0.0])
     renderer = SceneRenderer(cell, width, height, camera=camera)
     try:

@@ -21,6 +21,31 @@ PUBLISHED = ("reproduce.json", "report.md", "report.html", "results.csv", "figur
              "train/*/convergence.json", "sweep/*")
 
 
+def check_dest(out: Path, dest: Path) -> None:
+    """Refuse a ``dest`` that holds a run folder of another kind (a training run, an
+    evaluation, a sweep) or the report of another reproduction (its ``report.md`` beside a
+    ``reproduce.json`` of another configuration, or none); reads only.
+
+    Raises:
+        ConfigError: ``publish``, naming what ``dest`` holds.
+    """
+    from vgs.errors import RunMismatchError
+    from vgs.runfolder.folderkind import claim
+
+    try:
+        claim(dest, "reproduction")
+    except RunMismatchError as exc:
+        raise ConfigError("publish", exc.message) from None
+    if (dest / "report.md").exists():
+        theirs = read_json(dest / "reproduce.json") if (dest / "reproduce.json").exists() \
+            else None
+        mine = read_json(out / "reproduce.json") if (out / "reproduce.json").exists() else None
+        if theirs is None or mine is None or theirs["config"] != mine["config"]:
+            raise ConfigError("publish", f"{dest} holds the report of another reproduction "
+                                         "(report.md); publish into a new folder, or remove "
+                                         "it first")
+
+
 def publish(out: Path, dest: Path) -> list[Path]:
     """Copy the small result files of a reproduction (no checkpoints, no TensorBoard logs, no
     journals) from ``out`` to ``dest`` (e.g. ``docs/results/quick``), keeping the layout, and
@@ -34,11 +59,13 @@ def publish(out: Path, dest: Path) -> list[Path]:
         The copied files.
 
     Raises:
-        ConfigError: If ``out`` holds no report, or a policy folder in ``dest`` holds another
-            run.
+        ConfigError: If ``out`` holds no report, ``dest`` another kind of run folder or
+            another reproduction's report (:func:`check_dest`), or a policy folder in ``dest``
+            holds another run.
     """
     if not (out / "report.md").exists():
         raise ConfigError("report", f"{out} holds no report.md; run vgs report first")
+    check_dest(out, dest)
     copied = []
     for pattern in PUBLISHED:
         for src in sorted(out.glob(pattern)):
