@@ -90,13 +90,13 @@ def test_model_info(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("argv", "field"),
     [
-        (("demo", "--peg-mass", "-1"), "peg.mass"),
+        (("demo", "--peg-mass", "-1"), "--peg-mass"),
         (("demo", "--clearance", "0"), "hole.clearance"),
         (("demo", "--peg-diameter", "0.0315", "--clearance", "0.001"), "hole.clearance"),
         (("demo", "--offset", "51"), "offset"),
         (("sweep", "--offsets-mm", "0,60", "--trials", "1"), "offsets"),
         (("sweep", "--profile", "nope"), "profile"),
-        (("export-scene", "--set", "cell.hole.segments=4"), "hole.segments"),
+        (("export-scene", "--set", "cell.hole.segments=4"), "cell.hole.segments"),
         (("export-scene", "--peg-mass", "abc"), "argument --peg-mass"),
         (("frobnicate",), "argument COMMAND"),
         (("seeds", "nowhere", "--out", "x"), "seeds"),

@@ -102,15 +102,24 @@ def test_killed_runs_resume_to_the_uninterrupted_table(tmp_path: Path, reference
     for trial in range(TRIALS):
         for kind in ("train", "eval"):
             out = tmp_path / f"{kind}{trial}"
+            table = out / ("episodes.csv" if kind == "train" else "journal.jsonl")
             proc = ctx.Process(target=_child, args=(kind, str(out), 0.03))
             proc.start()
-            time.sleep(rnd.uniform(0.02, 0.95 * spans[kind]))
+            if trial % 2:
+                # Half the kills wait for the first row, so that some land inside the episodes
+                # however slow a loaded host makes the start (a random time alone can miss).
+                deadline = time.perf_counter() + 3 * spans[kind]
+                while (proc.is_alive() and time.perf_counter() < deadline and not (
+                        table.exists() and len(table.read_bytes().splitlines()) > 1)):
+                    time.sleep(0.005)
+                time.sleep(rnd.uniform(0.0, 0.2 * spans[kind]))
+            else:
+                time.sleep(rnd.uniform(0.02, 0.95 * spans[kind]))
             if proc.is_alive():
                 os.kill(proc.pid, signal.SIGKILL)
                 killed += 1
             proc.join(30)
             assert proc.exitcode is not None
-            table = out / ("episodes.csv" if kind == "train" else "journal.jsonl")
             if table.exists() and 0 < len(table.read_bytes().splitlines()) - (
                     kind == "train") < (6 if kind == "train" else 8):
                 partial += 1  # killed half-way through the episodes
