@@ -31,9 +31,6 @@ import numpy as np
 Vec3 = tuple[float, float, float]
 Mat3 = tuple[float, float, float, float, float, float, float, float, float]
 
-IDENTITY: Mat3 = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
-
-
 def mat3(R: np.ndarray | Sequence[float]) -> Mat3:
     """A 3x3 array (or anything with nine entries in row order) as a flat 9-tuple."""
     if isinstance(R, np.ndarray):

@@ -148,10 +148,6 @@ class ArmController:
         """:meth:`tcp_pose` as plain floats (a 3-tuple and a flat row-major 9-tuple)."""
         return tuple(self._tcp_xpos.tolist()), tuple(self._tcp_xmat.tolist())  # type: ignore
 
-    def tcp_position(self) -> vm.Vec3:
-        """``p_world_tcp`` from the measured joint angles, as plain floats."""
-        return tuple(self._tcp_xpos.tolist())  # type: ignore[return-value]
-
     def tcp_height(self) -> float:
         """Height of the TCP from the measured joint angles [m] (no copies)."""
         return float(self._tcp_xpos[2])
@@ -214,11 +210,6 @@ class ArmController:
         if rx == 0.0 and ry == 0.0 and rz == 0.0:
             return p, self._R_ref
         return p, vm.mm(vm.exp_so3((rx, ry, rz)), self._R_ref)
-
-    def commanded_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(p_cmd, R_cmd)`` as arrays (see :meth:`_commanded_t`)."""
-        p, R = self._commanded_t()
-        return np.array(p), vm.array3(R)
 
     def absorb_offset(self) -> None:
         """Move the compliant offset into the reference (the commanded pose is unchanged)."""
