@@ -36,7 +36,7 @@ import pandas as pd
 from tqdm import tqdm
 
 from vgs.analysis.report import load_results
-from vgs.assembly.episode import EpisodeRunner
+from vgs.assembly.episode import EpisodeRunner, GraspCommand, across_axis_mm
 from vgs.checkpoint import atomic_write_text
 from vgs.config import ExperimentConfig
 from vgs.errors import ConfigError
@@ -135,9 +135,10 @@ def _site(task: tuple[int, int, float, float, int, int]) -> tuple[int, float, fl
     cell, _ = runner.cell(peg)
     p_world_peg, R_world_peg = cell.peg_pose()
     a = R_world_peg[:2, 2] / np.linalg.norm(R_world_peg[:2, 2])
-    q = np.asarray(hm.pixel_to_world(row, col), dtype=float)
-    v = q - p_world_peg[:2]
-    return i, 1000 * float(a @ v), 1000 * abs(float(a[0] * v[1] - a[1] * v[0]))
+    x, y = (float(c) for c in hm.pixel_to_world(row, col))
+    along = 1000 * float(a @ (np.array([x, y]) - p_world_peg[:2]))
+    # The record's own formula for the distance across the axis (one owner).
+    return i, along, across_axis_mm(GraspCommand(x, y, 0.0), p_world_peg, R_world_peg)
 
 
 def sites_table(sites: pd.DataFrame) -> str:
