@@ -82,3 +82,21 @@ def test_an_episode_on_a_shifted_peg_records_its_centre_of_mass() -> None:
     row = record.to_row()
     assert row["grasp_offset_com_mm"] == pytest.approx(row["grasp_offset_mm"] - 20.0)
     assert row["peg_com_shift_mm"] == 20.0 and row["across_mm"] >= 0.0
+
+
+def test_the_com_oracle_grasps_at_the_true_centre_of_mass() -> None:
+    from vgs.rollout.policies import Decision, episode_policy, load_policy
+
+    cfg = profile("paper")
+    peg = replace(cfg.cell.peg, com_shift_mm=20.0)
+    oracle = load_policy("com-oracle", cfg)
+    chosen: dict[str, Decision] = {}
+    record, _, _ = EpisodeRunner(cfg).run(
+        5, episode_policy(oracle, np.random.default_rng(0), chosen), peg=peg, assemble=False)
+    assert record.grasp_success and chosen["decision"].command is not None
+    # the pads close on the centre of mass (the grasp's settling moves them a little),
+    # 20 mm from the middle towards the heavy end (body +z)
+    assert abs(record.grasp_offset_com * 1000) < 2.0
+    assert record.grasp_offset * 1000 == pytest.approx(20.0, abs=2.0)
+    with pytest.raises(ConfigError, match="true centre of mass"):
+        oracle(EpisodeRunner(cfg).observe(5, peg), np.random.default_rng(0))

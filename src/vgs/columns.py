@@ -53,7 +53,7 @@ COLUMNS: dict[str, Column] = {
     "index": Column("", "int", "episode index within the evaluation's plan"),
     "job": Column("", "int", "which of the evaluations run together the row belongs to "
                              "(journal only)"),
-    "policy": Column("", "str", "policy label: baseline, vgs, center, random or a user policy"),
+    "policy": Column("", "str", "policy label: baseline, vgs, center, random, com-oracle or a user policy"),
     "condition": Column("", "str", "test condition: nominal, mass or length"),
     "root_seed": Column("", "int", "root seed of the evaluation"),
     "train_run": Column("", "str", "training seed the policy comes from, s<seed> (its run is "

@@ -39,6 +39,16 @@ class GraspCommand:
 Policy = Callable[[Heightmap], GraspCommand]
 
 
+@dataclass(frozen=True)
+class OracleGrasp:
+    """A grasp chooser that reads the peg's true centre of mass ``p_world_com`` besides the
+    heightmap: ground truth, for analysis only (the ``com-oracle`` reference policy of
+    ``vgs evaluate``, which marks where a grasp at the true centre of mass leads). The
+    controller never sees it."""
+
+    choose: Callable[[Heightmap, np.ndarray], GraspCommand]
+
+
 def peg_axis_from_heightmap(hm: Heightmap) -> tuple[np.ndarray, np.ndarray, float]:
     """Centroid (world x, y), unit axis and visible length of the object in the heightmap.
 
@@ -238,14 +248,15 @@ class EpisodeRunner:
         cell.reset(np.random.default_rng(seed))
         return cam.capture(cell.data)
 
-    def run(self, seed: int, policy: Policy, peg: PegConfig | None = None,
+    def run(self, seed: int, policy: Policy | OracleGrasp, peg: PegConfig | None = None,
             trace: bool = False, assemble: bool = True, time_limit: float | None = None
             ) -> tuple[EpisodeRecord, Robot, Heightmap]:
         """Run one whole episode.
 
         Args:
             seed: Episode seed: sets the peg pose, the hole displacement and the sensor noise.
-            policy: Chooses the grasp from the heightmap.
+            policy: Chooses the grasp from the heightmap (an :class:`OracleGrasp` also from
+                the peg's true centre of mass).
             peg: Peg of this episode (default: the configured one).
             trace: Keep per-tick signals in ``robot.trace``.
             assemble: Run the assembly after a successful grasp; ``False`` ends the episode
@@ -267,7 +278,10 @@ class EpisodeRunner:
         record.hole_offset_mm = vm.norm((cell.hole_xy - cell.cfg.hole.nominal_xy).tolist()) * 1000
         robot = Robot(cell, self.cfg.controller, np.random.default_rng([seed, 1]), trace=trace)
         try:
-            command = policy(hm)
+            if isinstance(policy, OracleGrasp):
+                command = policy.choose(hm, cell.peg_com_world())
+            else:
+                command = policy(hm)
             p_peg, R_peg = cell.peg_pose()
             record.jaw_misalignment_deg = jaw_misalignment_deg(command.yaw, R_peg)
             record.across_mm = across_axis_mm(command, p_peg, R_peg)

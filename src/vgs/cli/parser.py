@@ -136,8 +136,9 @@ def _add_demo(sub: Any) -> None:
                            "(default: 0, the centre heuristic)")
     demo.add_argument("--policy", metavar="POLICY",
                       help="grasp with this policy instead: a training run or policy folder "
-                           "(its Q heat map beside the video and in the figure), random, center "
-                           "or module:function, choosing as vgs evaluate does")
+                           "(its Q heat map beside the video and in the figure), random, center, "
+                           "com-oracle (the peg's true centre of mass, analysis only) or "
+                           "module:function, choosing as vgs evaluate does")
     demo.add_argument("--condition", default="nominal", choices=CONDITIONS,
                       help="the episode's peg: a test condition's, at the far end of its range "
                            "(mass and length +15 %%, com-spread 20 mm; default: %(default)s)")
@@ -282,10 +283,13 @@ def _add_evaluate(sub: Any) -> None:
                               help="test one policy on one condition (parallel, resumable)")
     _config_flags(evaluate)
     evaluate.add_argument("--policy", required=True,
-                          help="a training run folder, random, center, or module:function")
+                          help="a training run folder, random, center, com-oracle (grasps at "
+                               "the peg's true centre of mass: ground truth, analysis only) or "
+                               "module:function")
     evaluate.add_argument("--condition", default="nominal", choices=CONDITIONS,
-                          help="nominal peg, mass +-15 %%, or length 85-115 %% with the mass "
-                               "following (default: %(default)s)")
+                          help="nominal peg, mass +-15 %%, length 85-115 %% with the mass "
+                               "following, or a centre of mass off the middle: com (heavy end "
+                               "painted), com-hidden, com-spread (default: %(default)s)")
     evaluate.add_argument("--episodes", type=int,
                           help="test episodes (default: the profile's eval.episodes)")
     evaluate.add_argument("--seed", type=seed_arg,

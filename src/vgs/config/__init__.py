@@ -40,6 +40,7 @@ from vgs.config.configfile import read_config_file
 from vgs.config.control import AssemblyConfig, ControllerConfig
 from vgs.config.experiment import (
     PROFILES,
+    REFERENCE_POLICIES,
     ExperimentConfig,
     ReproduceConfig,
     profile,
@@ -65,7 +66,7 @@ from vgs.config.tree import (
 
 __all__ = [
     "ACTIONS", "BACKBONES", "COM_CONDITIONS", "CONDITIONS", "PAPER_CONDITIONS", "NO_SUCH_FIELD",
-    "PRECISIONS", "PROFILES",
+    "PRECISIONS", "PROFILES", "REFERENCE_POLICIES",
     "ROTATE_MODES", "AgentConfig", "AssemblyConfig", "CameraConfig", "CellConfig",
     "ControllerConfig", "EvalConfig", "EvalScene", "ExperimentConfig", "FTSensorConfig",
     "GripperConfig", "HoleConfig", "NetworkConfig", "PegConfig", "ReproduceConfig", "RewardConfig",

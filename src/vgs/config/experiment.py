@@ -10,6 +10,10 @@ from vgs.config.control import AssemblyConfig, ControllerConfig
 from vgs.config.learning import AgentConfig, NetworkConfig, RewardConfig, TrainConfig
 from vgs.errors import ConfigError
 
+# The reference policies of vgs evaluate (vgs.rollout.policies builds them): the centre
+# heuristic, a random peg pixel, and the centre-of-mass oracle (ground truth, analysis only).
+REFERENCE_POLICIES = ("center", "random", "com-oracle")
+
 
 @dataclass(frozen=True)
 class ReproduceConfig:
@@ -19,8 +23,8 @@ class ReproduceConfig:
         train_seeds: Root seeds of the training runs; each seed trains the baseline and VGS
             (the paper reports one run per method).
         conditions: Test conditions (``nominal``, ``mass``, ``length``; paper 4.2).
-        reference_policies: Extra heuristic policies evaluated beside the learned ones
-            (``center``, ``random``).
+        reference_policies: Extra reference policies evaluated beside the learned ones
+            (:data:`REFERENCE_POLICIES`: ``center``, ``random``, ``com-oracle``).
         sweep_offsets: Grasp offsets of the grasp-position sweep (0: no sweep).
         sweep_trials: Trials per offset of the sweep.
         eval_seed: Root seed of the test episodes (the same scenes for every policy).
@@ -40,10 +44,10 @@ class ReproduceConfig:
         if bad or not self.conditions:
             raise ConfigError("reproduce.conditions",
                               f"must be a non-empty subset of {', '.join(CONDITIONS)}; got {bad}")
-        bad = [p for p in self.reference_policies if p not in ("center", "random")]
+        bad = [p for p in self.reference_policies if p not in REFERENCE_POLICIES]
         if bad:
             raise ConfigError("reproduce.reference_policies",
-                              f"must be center and/or random, got {bad}")
+                              f"must be a subset of {', '.join(REFERENCE_POLICIES)}, got {bad}")
         if self.sweep_offsets < 0 or self.sweep_trials < 1:
             raise ConfigError("reproduce.sweep_offsets", "offsets >= 0 and trials >= 1")
 

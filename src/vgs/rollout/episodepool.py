@@ -30,7 +30,7 @@ from vgs.assembly.episode import EpisodeRunner, GraspCommand
 from vgs.assembly.record import EpisodeRecord
 from vgs.config import ExperimentConfig, PegConfig
 from vgs.errors import ConfigError, EpisodeError, SimulationError, VGSError
-from vgs.rollout.policies import EvalPolicy, is_run_dir, load_policy
+from vgs.rollout.policies import Decision, EvalPolicy, episode_policy, is_run_dir, load_policy
 from vgs.runfolder.common import host
 
 MAX_ATTEMPTS = 3
@@ -105,16 +105,10 @@ class EpisodeWorker:
             EpisodeError: On any other exception inside the episode (a bug is not a result).
         """
         t0 = time.perf_counter()
-        decision: dict[str, Any] = {}
+        chosen: dict[str, Decision] = {}
         rng = np.random.default_rng([task.seed, 2])
         try:
-            chooser = self.policy(task.policy)
-
-            def policy(hm: Any) -> Any:
-                d = chooser(hm, rng)
-                decision.update(rotation=d.rotation, row=d.row, col=d.col, q_value=d.q_value)
-                return d.command
-
+            policy = episode_policy(self.policy(task.policy), rng, chosen)
             record, _, _ = self.runner.run(task.seed, policy, peg=task.peg)
             if record.success and not math.isfinite(record.assembly_time):
                 record.success, record.failure_reason = False, "unstable"
@@ -126,6 +120,9 @@ class EpisodeWorker:
                                f"{type(exc).__name__}: {message}; the journal keeps the "
                                "episodes finished before it: fix the cause and run the same "
                                "command again") from None
+        d = chosen.get("decision")
+        decision = ({} if d is None else
+                    {"rotation": d.rotation, "row": d.row, "col": d.col, "q_value": d.q_value})
         return task_row(task, record, decision, round(time.perf_counter() - t0, 3))
 
     def grasp(self, task: GraspTask) -> EpisodeRecord:

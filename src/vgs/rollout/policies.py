@@ -6,6 +6,9 @@ A policy spec is one of
 * ``random``: a uniformly random pixel on the peg, the jaws across its perceived axis (the
   position action) or at a uniformly random rotation out of the network's R (the rotation
   action): what the agent does while exploring;
+* ``com-oracle``: a grasp at the peg's true centre of mass, pads along its perceived axis:
+  ground truth, for analysis only (where a grasp at the centre of mass leads, beside the
+  centre heuristic, on the ``com`` conditions);
 * a training run folder (``run.json`` and ``checkpoint.pt`` from ``vgs train``): the trained
   evaluation network Q_eva acting greedily, ``argmax_(k,i,j) Q(k, i, j)`` over the peg pixels;
 * a policy folder (``run.json``, ``policy.pt`` and ``policy.json``, as ``vgs export-policy RUN
@@ -14,8 +17,10 @@ A policy spec is one of
 * ``package.module:function``: a user policy; ``function(cfg)`` must return an
   :class:`EvalPolicy`.
 
-Every policy sees only the heightmap (and, for the random one, a generator seeded from the
-episode seed), never the simulator state.
+Every policy but ``com-oracle`` sees only the heightmap (and, for the random one, a
+generator seeded from the episode seed), never the simulator state;
+:func:`episode_policy` hands the oracle the peg's true centre of mass
+(:class:`vgs.assembly.episode.OracleGrasp`).
 """
 
 from __future__ import annotations
@@ -29,14 +34,14 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from vgs.assembly.episode import GraspCommand, center_policy
+from vgs.assembly.episode import GraspCommand, OracleGrasp, Policy, center_policy
 from vgs.checkpoint import MAX_CHECKPOINT_BYTES, check_regular
-from vgs.config import ExperimentConfig, NetworkConfig, from_dict
+from vgs.config import REFERENCE_POLICIES, ExperimentConfig, NetworkConfig, from_dict
 from vgs.errors import ConfigError, CorruptFileError
 from vgs.grasping.actions import closing_angle, peg_mask
 from vgs.sim.camera import Heightmap
 
-HEURISTICS = ("center", "random")
+HEURISTICS = REFERENCE_POLICIES  # the policies named by a word
 POLICY_FORMAT = "vgs-grasp-q/1"  # policy.json of vgs export-policy
 POLICY_WEIGHTS, POLICY_DESCRIPTION = "policy.pt", "policy.json"
 
@@ -83,6 +88,24 @@ class CenterPolicy:
 
     def __call__(self, hm: Heightmap, rng: np.random.Generator) -> Decision:
         return Decision(center_policy()(hm))
+
+
+@dataclass
+class ComOraclePolicy:
+    """The centre-of-mass oracle: the pads at the peg's true centre of mass ``p_world_com``
+    (x, y), along its perceived axis (the centre heuristic's heading). Ground truth, for
+    analysis only; :func:`episode_policy` passes ``p_world_com``."""
+
+    label: str = "com-oracle"
+    reads_ground_truth: bool = True
+
+    def __call__(self, hm: Heightmap, rng: np.random.Generator,
+                 p_world_com: np.ndarray | None = None) -> Decision:
+        if p_world_com is None:
+            raise ConfigError("policy", "com-oracle reads the peg's true centre of mass: run it "
+                                        "through vgs evaluate or vgs demo")
+        heading = center_policy()(hm).yaw
+        return Decision(GraspCommand(float(p_world_com[0]), float(p_world_com[1]), heading))
 
 
 @dataclass
@@ -250,6 +273,27 @@ class GreedyPolicy:
                         q_value=action.q_value)
 
 
+def episode_policy(chooser: EvalPolicy, rng: np.random.Generator,
+                   chosen: dict[str, Decision]) -> Policy | OracleGrasp:
+    """The grasp chooser :meth:`vgs.assembly.episode.EpisodeRunner.run` takes for an
+    evaluation policy; its decision lands in ``chosen["decision"]``. A policy with
+    ``reads_ground_truth`` (``com-oracle``) gets the peg's true centre of mass too."""
+    if getattr(chooser, "reads_ground_truth", False):
+        oracle: Any = chooser
+
+        def choose(hm: Heightmap, p_world_com: np.ndarray) -> GraspCommand:
+            chosen["decision"] = oracle(hm, rng, p_world_com)
+            return chosen["decision"].command
+
+        return OracleGrasp(choose)
+
+    def policy(hm: Heightmap) -> GraspCommand:
+        chosen["decision"] = chooser(hm, rng)
+        return chosen["decision"].command
+
+    return policy
+
+
 def is_run_dir(spec: str) -> bool:
     """Whether ``spec`` names a training run folder or a policy folder (``run.json``)."""
     return (Path(spec) / "run.json").exists()
@@ -265,6 +309,8 @@ def load_policy(spec: str, cfg: ExperimentConfig, device: str = "cpu") -> EvalPo
         return CenterPolicy()
     if spec == "random":
         return RandomPolicy(cfg.network)
+    if spec == "com-oracle":
+        return ComOraclePolicy()
     if is_run_dir(spec):
         return GreedyPolicy(Path(spec), device)
     if ":" in spec and not Path(spec).exists():

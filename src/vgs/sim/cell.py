@@ -150,6 +150,11 @@ class Cell:
         b = self.ids.peg_body
         return self.data.xpos[b].copy(), self.data.xmat[b].reshape(3, 3).copy()
 
+    def peg_com_world(self) -> np.ndarray:
+        """``p_world_com``: the peg's true centre of mass (the body's inertial frame), ground
+        truth for records, tests and the ``com-oracle`` reference policy only."""
+        return self.data.xipos[self.ids.peg_body].copy()
+
     def hole_position(self) -> np.ndarray:
         """Centre of the hole entrance in the world frame."""
         return np.array([*self.hole_xy, self.cfg.hole.depth])

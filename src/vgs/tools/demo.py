@@ -16,7 +16,7 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import mujoco
 import numpy as np
@@ -28,6 +28,9 @@ from vgs.control.robot import Trace
 from vgs.errors import ConfigError
 from vgs.sim.camera import Heightmap
 from vgs.sim.rg2 import PAD_HALF
+
+if TYPE_CHECKING:
+    from vgs.rollout.policies import Decision
 
 
 @dataclass(frozen=True)
@@ -131,7 +134,8 @@ def run_demo(cfg: ExperimentConfig, seed: int, offset: float = 0.0, policy: str 
     """
     check_offset(offset, cfg.cell.peg)
     runner = EpisodeRunner(cfg)
-    chosen: dict[str, Any] = {}
+    chosen: dict[str, Decision] = {}
+    grasp: Any
     if policy is None:
         grasp = offset_policy(offset)
         name = "center" if offset == 0 else f"center {offset * 1000:+g} mm"
@@ -139,16 +143,12 @@ def run_demo(cfg: ExperimentConfig, seed: int, offset: float = 0.0, policy: str 
         if offset != 0:
             raise ConfigError("offset", "applies to the centre heuristic; leave it out with "
                                         "--policy")
-        from vgs.rollout.policies import load_policy
+        from vgs.rollout.policies import episode_policy, load_policy
 
         chooser = load_policy(policy, cfg)
         name = str(getattr(chooser, "label", policy))
-        rng = np.random.default_rng([seed, 2])  # as vgs evaluate draws it
-
-        def grasp(hm: Heightmap) -> GraspCommand:
-            decision = chooser(hm, rng)
-            chosen["decision"] = decision
-            return decision.command
+        # its generator as vgs evaluate draws it
+        grasp = episode_policy(chooser, np.random.default_rng([seed, 2]), chosen)
 
     if progress is None:
         record, robot, hm = runner.run(seed, grasp, peg=peg, trace=True)
