@@ -53,8 +53,10 @@ COLUMNS: dict[str, Column] = {
     "index": Column("", "int", "episode index within the evaluation's plan"),
     "job": Column("", "int", "which of the evaluations run together the row belongs to "
                              "(journal only)"),
-    "policy": Column("", "str", "policy label: baseline, vgs, center, random, com-oracle or a user policy"),
-    "condition": Column("", "str", "test condition: nominal, mass or length"),
+    "policy": Column("", "str", "policy label: baseline, vgs, center, random, com-oracle or a "
+                                "user policy"),
+    "condition": Column("", "str", "test condition: nominal, mass, length, com, com-hidden or "
+                                      "com-spread"),
     "root_seed": Column("", "int", "root seed of the evaluation"),
     "train_run": Column("", "str", "training seed the policy comes from, s<seed> (its run is "
                                    "train/<mode>_s<seed>; tables merged over training seeds)"),

@@ -13,6 +13,6 @@ LINESTYLES = ("-", "--", "-.", ":")  # several runs of one policy (training seed
 
 
 def policy_color(policy: str) -> str:
-    """The colour of ``policy`` (``baseline``, ``vgs``, ``center``, ``random``, ``com-oracle``; a training run's
-    mode), :data:`OTHER_POLICY` for any other."""
+    """The colour of ``policy`` (``baseline``, ``vgs``, ``center``, ``random``,
+    ``com-oracle``; a training run's mode), :data:`OTHER_POLICY` for any other."""
     return POLICY_COLORS.get(str(policy), OTHER_POLICY)
