@@ -22,7 +22,8 @@ class ReproduceConfig:
     Attributes:
         train_seeds: Root seeds of the training runs; each seed trains the baseline and VGS
             (the paper reports one run per method).
-        conditions: Test conditions (``nominal``, ``mass``, ``length``; paper 4.2).
+        conditions: Test conditions (the paper's ``nominal``, ``mass``, ``length``, 4.2;
+            ``com``, ``com-hidden``, ``com-spread``: :mod:`vgs.config.conditions`).
         reference_policies: Extra reference policies evaluated beside the learned ones
             (:data:`REFERENCE_POLICIES`: ``center``, ``random``, ``com-oracle``).
         sweep_offsets: Grasp offsets of the grasp-position sweep (0: no sweep).
