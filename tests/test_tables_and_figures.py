@@ -69,3 +69,23 @@ def test_report_rerun_keeps_its_title_and_results_have_total_gain(quick_reproduc
     columns = pd.read_csv(copy / "results.csv").columns
     assert {"total_gain_pct", "success_total_gain_pct", "gain_pct", "align_gain_pct"} \
         <= set(columns)
+
+
+def test_grasp_positions_show_the_centre_of_mass_where_it_is_off_the_middle(
+        tmp_path: Path) -> None:
+    """A condition whose peg's centre of mass is off the middle gets a second row of
+    histograms, offsets from the centre of mass; a uniform peg's figure keeps one row."""
+    import matplotlib.image
+
+    from vgs.analysis.reportfigures import plot_grasp_positions
+
+    rows = [{"condition": c, "policy": p, "grasp_success": True, "grasp_offset_mm": off,
+             "grasp_offset_com_mm": off - shift, "peg_com_shift_mm": shift}
+            for c, shift in (("nominal", 0.0), ("com", 20.0))
+            for p, off in (("vgs", 18.0), ("center", 0.5), ("com-oracle", 20.2))]
+    df = pd.DataFrame(rows)
+    one = plot_grasp_positions(df[df["condition"] == "nominal"], tmp_path / "one.png")
+    two = plot_grasp_positions(df, tmp_path / "two.png")
+    h1 = matplotlib.image.imread(one).shape[0]
+    h2 = matplotlib.image.imread(two).shape[0]
+    assert h2 == 2 * h1

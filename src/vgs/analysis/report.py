@@ -318,7 +318,8 @@ def build_report(out: Path, title: str | None = None, center: Path | None = None
 
     doc.h(2, "Where the policies grasp")
     doc.img(plot_grasp_positions(df, figures / "grasp_positions.png"),
-            "Realised grasp offset along the peg axis from the centre of mass, test episodes")
+            "Realised grasp offset along the peg axis from its middle (and, where the centre "
+            "of mass is off the middle, from the centre of mass), test episodes")
 
     _training_section(doc, out, figures)
     _sweep_section(doc, out)

@@ -66,24 +66,39 @@ def plot_times(df: pd.DataFrame, condition: str, path: Path) -> Path:
 
 
 def plot_grasp_positions(df: pd.DataFrame, path: Path) -> Path:
-    """Where each policy grasped: the realised offset from the centre of mass along the peg."""
+    """Where each policy grasped: the realised offset along the peg from its middle (top row;
+    the centre of mass of a uniform peg) and, on a condition whose centre of mass is off the
+    middle, from the centre of mass (bottom row). Positive offsets point to the heavy end
+    (body +z); ground truth (``grasp_offset_mm``, ``grasp_offset_com_mm``)."""
     conditions = [c for c in CONDITIONS if c in set(df["condition"])]
-    fig, axes = plt.subplots(1, len(conditions), figsize=(4.5 * len(conditions), 3.6),
-                             squeeze=False)
+    shifted = {c for c in conditions if "peg_com_shift_mm" in df
+               and "grasp_offset_com_mm" in df
+               and (df.loc[df["condition"] == c, "peg_com_shift_mm"].fillna(0) > 0).any()}
+    rows = [("grasp_offset_mm", "from the middle")]
+    if shifted:
+        rows.append(("grasp_offset_com_mm", "from the centre of mass"))
+    fig, axes = plt.subplots(len(rows), len(conditions),
+                             figsize=(4.5 * len(conditions), 3.6 * len(rows)), squeeze=False)
     bins = np.linspace(-60, 60, 41)
-    for ax, condition in zip(axes[0], conditions, strict=True):
-        part = df[(df["condition"] == condition) & df["grasp_success"].astype(bool)]
-        for policy in policy_order(sorted(set(df["policy"]))):
-            off = part.loc[part["policy"] == policy, "grasp_offset_mm"].dropna()
-            if off.empty:
+    for r, (column, reference) in enumerate(rows):
+        for ax, condition in zip(axes[r], conditions, strict=True):
+            if column == "grasp_offset_com_mm" and condition not in shifted:
+                ax.axis("off")
                 continue
-            ax.hist(off, bins=bins, alpha=0.45, color=_color(policy),
-                    label=f"{policy} (mean |l| {off.abs().mean():.1f} mm)")
-        ax.set_title(condition)
-        ax.set_xlabel("grasp offset from the centre of mass [mm]")
-        ax.set_ylabel("grasps")
-        ax.legend(fontsize=7)
-    fig.suptitle("Where each policy grasps along the peg (test episodes)")
+            part = df[(df["condition"] == condition) & df["grasp_success"].astype(bool)]
+            for policy in policy_order(sorted(set(df["policy"]))):
+                off = part.loc[part["policy"] == policy, column].dropna()
+                if off.empty:
+                    continue
+                ax.hist(off, bins=bins, alpha=0.45, color=_color(policy),
+                        label=f"{policy} (mean |l| {off.abs().mean():.1f} mm)")
+            ax.axvline(0.0, color="0.3", lw=0.8)
+            ax.set_title(condition)
+            ax.set_xlabel(f"grasp offset {reference} [mm], + heavy end"
+                          if condition in shifted else f"grasp offset {reference} [mm]")
+            ax.set_ylabel("grasps")
+            ax.legend(fontsize=7)
+    fig.suptitle("Where each policy grasps along the peg (test episodes, ground truth)")
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
