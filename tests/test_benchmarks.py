@@ -1,8 +1,9 @@
 """Every benchmark runs, at a tiny size, so that none rots (issue 40, item 4).
 
 ``benchmarks/`` holds benchmarks only: ``bench_*.py`` (each run here in a subprocess with the
-arguments below, about 1 min together on a loaded 2-core host) and ``bench_gpu_node.sh``
-(checked for syntax only: it needs a GPU node). Figures are not checked, only that each script
+arguments below, about 1 min together on a loaded 2-core host), ``bench_gpu_node.sh`` and
+``bench_fresh_clone.sh`` (checked for syntax only: one needs a GPU node, the other a clone, a
+set-up and the quick profile's run). Figures are not checked, only that each script
 finishes and prints its last section.
 """
 
@@ -34,7 +35,7 @@ TINY: dict[str, tuple[list[str], str]] = {
 
 def test_benchmarks_holds_benchmarks_only() -> None:
     names = {p.name for p in BENCHMARKS.iterdir() if not p.name.startswith((".", "__"))}
-    assert names == {*TINY, "bench_gpu_node.sh"}
+    assert names == {*TINY, "bench_gpu_node.sh", "bench_fresh_clone.sh"}
 
 
 @pytest.mark.parametrize("script", sorted(TINY))
@@ -46,7 +47,8 @@ def test_benchmark_runs_at_a_tiny_size(script: str) -> None:
     assert last in result.stdout, result.stdout[-3000:]
 
 
-def test_gpu_node_script_parses() -> None:
-    result = subprocess.run(["bash", "-n", str(BENCHMARKS / "bench_gpu_node.sh")],
+@pytest.mark.parametrize("script", ["bench_gpu_node.sh", "bench_fresh_clone.sh"])
+def test_shell_benchmark_parses(script: str) -> None:
+    result = subprocess.run(["bash", "-n", str(BENCHMARKS / script)],
                             capture_output=True, text=True)
     assert result.returncode == 0, result.stderr
