@@ -17,7 +17,12 @@ default) n = 1, k = 0 and the jaws close across the peg's axis as perceived in t
 heightmap; with ``"rotation"`` n = R = ``network.num_rotations`` and theta_k = 2 pi k / R is the
 closing direction. ``info["action_mask"]`` (bool (H, W)) marks the pixels on the peg, where the
 agent of the paper grasps; an action elsewhere grasps at the table and fails. The mask is the
-same for every map.
+same for every map; :meth:`GraspAssembleEnv.action_masks` gives sb3-contrib's MaskablePPO its
+per-dimension form, :class:`vgs.envs.masking.FlatGraspAction` a flat action masked exactly.
+
+Grasp-only episodes (``assemble=False``) end after the grasp (``failure_reason``
+``no_assembly``): the reward is r_G alone, whatever the mode. With the assembly (the default)
+an episode is exactly what ``vgs evaluate`` runs.
 
 Reward: paper eq. 5 with training's code (:func:`vgs.grasping.rewards.episode_reward`):
 ``r_G`` for a successful grasp plus, in ``vgs`` mode, ``r_AM`` when the assembly succeeded
