@@ -22,7 +22,7 @@ per-dimension form, :class:`vgs.envs.masking.FlatGraspAction` a flat action mask
 
 Grasp-only episodes (``assemble=False``) end after the grasp (``failure_reason``
 ``no_assembly``): the reward is r_G alone, whatever the mode. With the assembly (the default)
-an episode is exactly what ``vgs evaluate`` runs.
+an episode runs the same code as ``vgs evaluate``'s (unchanged).
 
 Reward: paper eq. 5 with training's code (:func:`vgs.grasping.rewards.episode_reward`):
 ``r_G`` for a successful grasp plus, in ``vgs`` mode, ``r_AM`` when the assembly succeeded
