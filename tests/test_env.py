@@ -81,7 +81,8 @@ def test_reward_and_threshold_follow_training(monkeypatch: pytest.MonkeyPatch) -
     env = small_env()
     times = iter([50.0, 30.0, 35.0, 45.0])
 
-    def fake_run(seed: int, policy: Any, peg: Any = None, trace: bool = False) -> tuple:
+    def fake_run(seed: int, policy: Any, peg: Any = None, trace: bool = False,
+                 assemble: bool = True) -> tuple:
         return EpisodeRecord(seed=seed, peg_mass=0.55, peg_length=0.1, grasp_success=True,
                              grasp_offset=0.0, success=True, assembly_time=next(times)), None, None
 
@@ -141,12 +142,17 @@ def _doc_blocks() -> list[str]:
 
 @pytest.mark.slow
 def test_documented_sb3_recipe_runs(capsys: pytest.CaptureFixture[str]) -> None:
-    """docs/agents.md's Stable-Baselines3 recipe, as written: PPO on 4 steps."""
+    """docs/agents.md's MaskablePPO recipe, its rollout and steps cut to 4."""
+    pytest.importorskip("sb3_contrib")
     sb3, _ = _doc_blocks()
+    short = sb3.replace("STEPS = 2048", "STEPS = 4").replace("n_steps=128, batch_size=64",
+                                                              "n_steps=4, batch_size=4")
+    assert "STEPS = 4\n" in short and "n_steps=4," in short  # both were found
     namespace: dict[str, Any] = {}
-    exec(compile(sb3, "docs/agents.md", "exec"), namespace)
+    exec(compile(short, "docs/agents.md", "exec"), namespace)
     assert namespace["model"].num_timesteps == 4
-    assert re.search(r"reward \d", capsys.readouterr().out)
+    assert namespace["env"].action_masks()[namespace["action"]]
+    assert re.search(r"reward 0\.3, grasped: True", capsys.readouterr().out)
 
 
 @pytest.mark.slow

@@ -17,7 +17,12 @@ default) n = 1, k = 0 and the jaws close across the peg's axis as perceived in t
 heightmap; with ``"rotation"`` n = R = ``network.num_rotations`` and theta_k = 2 pi k / R is the
 closing direction. ``info["action_mask"]`` (bool (H, W)) marks the pixels on the peg, where the
 agent of the paper grasps; an action elsewhere grasps at the table and fails. The mask is the
-same for every map.
+same for every map; :meth:`GraspAssembleEnv.action_masks` gives sb3-contrib's MaskablePPO its
+per-dimension form, :class:`vgs.envs.masking.FlatGraspAction` a flat action masked exactly.
+
+Grasp-only episodes (``assemble=False``) end after the grasp (``failure_reason``
+``no_assembly``): the reward is r_G alone, whatever the mode. With the assembly (the default)
+an episode runs the same code as ``vgs evaluate``'s (unchanged).
 
 Reward: paper eq. 5 with training's code (:func:`vgs.grasping.rewards.episode_reward`):
 ``r_G`` for a successful grasp plus, in ``vgs`` mode, ``r_AM`` when the assembly succeeded
@@ -123,6 +128,8 @@ class GraspAssembleEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         render_width: Width of rendered frames [px].
         render_height: Height of rendered frames [px].
         render_speed: Simulated seconds per second of video (``rgb_array_list``).
+        assemble: ``False`` ends each episode after the grasp (grasp-only episodes, module
+            docstring).
 
     Raises:
         ConfigError: On a bad mode, condition, render mode or configuration.
@@ -134,7 +141,7 @@ class GraspAssembleEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
                  condition: str = "nominal", overrides: Mapping[str, Any] | None = None,
                  threshold_s: float | None = None, render_mode: str | None = None,
                  render_width: int = 480, render_height: int = 360,
-                 render_speed: float = 4.0) -> None:
+                 render_speed: float = 4.0, assemble: bool = True) -> None:
         if mode not in MODES:
             raise ConfigError("mode", f"must be one of {MODES}, got {mode!r}")
         if condition not in CONDITIONS:
@@ -150,6 +157,9 @@ class GraspAssembleEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self.condition = condition
         self.render_mode = render_mode
         self.render_size = (int(render_width), int(render_height))
+        if not isinstance(assemble, (bool, np.bool_)):
+            raise ConfigError("assemble", f"must be True or False, got {assemble!r}")
+        self.assemble = bool(assemble)
         if not (math.isfinite(render_speed) and render_speed > 0):
             raise ConfigError("render_speed", f"must be > 0, got {render_speed!r}")
         self.render_speed = float(render_speed)
@@ -195,6 +205,28 @@ class GraspAssembleEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self._done = False
         return self._obs(self.heightmap), self._info(self.heightmap)
 
+    def pixel_mask(self) -> np.ndarray:
+        """The pixels on the peg in the current heightmap: ``info["action_mask"]``, bool (H, W).
+
+        Raises:
+            gymnasium.error.ResetNeeded: Before the first ``reset``.
+        """
+        if self.heightmap is None:
+            raise gym.error.ResetNeeded("call reset() before action_masks()")
+        return peg_mask(self.heightmap.depth)
+
+    def action_masks(self) -> np.ndarray:
+        """sb3-contrib's ``MaskablePPO`` mask of the ``MultiDiscrete([n, H, W])`` action, bool
+        (n + H + W,): every map, then the rows and the columns that hold a peg pixel.
+
+        MaskablePPO masks each dimension on its own, so this admits the peg's bounding box, a
+        superset of the peg's pixels (mostly table for a diagonal peg);
+        :class:`vgs.envs.masking.FlatGraspAction` gives the exact mask of a flat action.
+        """
+        mask = self.pixel_mask()
+        maps = np.ones(int(self.action_space.nvec[0]), dtype=bool)
+        return np.concatenate([maps, mask.any(axis=1), mask.any(axis=0)])
+
     def _check_action(self, action: Any) -> tuple[int, int, int]:
         """``(rotation, row, col)`` of an action: three integers (a NumPy integer array or a
         sequence of ints; no bools, no fractions) inside the action space.
@@ -236,7 +268,7 @@ class GraspAssembleEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
                                                             network.num_rotations, hm.depth))
         listing = self.render_mode == "rgb_array_list"  # record the states to draw them after
         record, robot, _ = self.runner.run(self._seed, lambda _hm: command, peg=self._peg,
-                                           trace=listing)
+                                           trace=listing, assemble=self.assemble)
         self._trace, self._frames = (robot.trace if listing else None), None
         time_ok = record.assembly_time if record.success else None
         exploring = self.episodes < self.cfg.agent.random_episodes
