@@ -28,6 +28,8 @@ TINY: dict[str, tuple[list[str], str]] = {
                           "--repeats", "1", "--warmup", "0"], "load average after"),
     "bench_replay.py": (["--scenes", "2", "--steps", "1", "--threads", "1"],
                         "checkpoint (scenes)"),
+    "bench_maskable_ppo.py": (["--steps", "4", "--block", "2", "--eval", "1", "--no-unmasked",
+                               "--n-steps", "4"], "evaluation, 1 fresh scenes"),
     "bench_train.py": (["--episodes", "0", "--no-ray", "--backbone", "light"],
                        "limit (the learner alone)"),
 }

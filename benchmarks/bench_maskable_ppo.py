@@ -1,6 +1,6 @@
 """MaskablePPO learning to grasp the peg in ``vgs/GraspAssemble-v0`` (docs/agents.md's recipe).
 
-Run: ``.venv/bin/python benchmarks/maskable_ppo.py --steps 2048 --seed 0 [--block 256]
+Run: ``.venv/bin/python benchmarks/bench_maskable_ppo.py --steps 2048 --seed 0 [--block 256]
 [--eval 100] [--no-unmasked]``; needs ``stable-baselines3`` and ``sb3-contrib``.
 
 The environment: the ``quick`` profile, a 64 x 64 heightmap of 5 mm pixels
@@ -81,11 +81,13 @@ class BlockLog(BaseCallback):
         return True
 
 
-def train(masked: bool, steps: int, seed: int, block: int) -> tuple[Any, float]:
-    """A trained (Maskable)PPO and its wall time [s]."""
+def train(masked: bool, steps: int, seed: int, block: int, n_steps: int = 128
+          ) -> tuple[Any, float]:
+    """A trained (Maskable)PPO and its wall time [s] (``n_steps`` steps per rollout)."""
     env = make_env(seed)
     algo = MaskablePPO if masked else PPO
-    model = algo("MultiInputPolicy", env, seed=seed, **PPO_KWARGS)
+    kwargs = {**PPO_KWARGS, "n_steps": n_steps, "batch_size": min(64, n_steps)}
+    model = algo("MultiInputPolicy", env, seed=seed, **kwargs)
     start = time.perf_counter()
     name = "MaskablePPO" if masked else "PPO (no mask)"
     model.learn(total_timesteps=steps, callback=[EpisodeLogger(), BlockLog(name, block)])
@@ -123,9 +125,11 @@ def main() -> None:
     parser.add_argument("--block", type=int, default=256, help="steps per printed block")
     parser.add_argument("--eval", type=int, default=100, help="evaluation episodes")
     parser.add_argument("--no-unmasked", action="store_true", help="skip the unmasked PPO")
+    parser.add_argument("--n-steps", type=int, default=128,
+                        help="PPO's steps per rollout (default: %(default)s)")
     args = parser.parse_args()
-    if min(args.steps, args.block, args.eval) < 1:
-        parser.error("--steps, --block and --eval must be >= 1")
+    if min(args.steps, args.block, args.eval) < 1 or args.n_steps < 2:
+        parser.error("--steps, --block and --eval must be >= 1, --n-steps >= 2")
     torch.set_num_threads(1)
     print(f"host {platform.node()} ({os.cpu_count()} cores), revision {revision()}, torch "
           f"{torch.__version__}, steps {args.steps}, seed {args.seed}", flush=True)
@@ -142,7 +146,7 @@ def main() -> None:
     policies: dict[str, Act] = {"random pixel on the peg": random_on_peg,
                                 "centroid of the peg's pixels": centroid}
     for masked in (True, False) if not args.no_unmasked else (True,):
-        model, wall = train(masked, args.steps, args.seed, args.block)
+        model, wall = train(masked, args.steps, args.seed, args.block, args.n_steps)
         name = "MaskablePPO, masked" if masked else "PPO, no mask"
         print(f"  {name}: {args.steps} steps in {wall:.0f} s ({wall / args.steps:.3f} s/step)",
               flush=True)
