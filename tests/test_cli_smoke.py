@@ -139,6 +139,22 @@ def test_config_lists_every_key_with_its_value_and_doc(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
+def test_evaluate_the_centre_of_mass_oracle(tmp_path: Path) -> None:
+    """``--policy com-oracle`` on ``com`` pegs: the worker hands the oracle the true centre of
+    mass, and the pads close on it (the row's ``grasp_offset_com_mm``)."""
+    out = tmp_path / "eval"
+    proc = vgs("evaluate", "--policy", "com-oracle", "--condition", "com", "--episodes", "1",
+               "--workers", "1", "--profile", "smoke", "--no-progress", "--out", str(out),
+               cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    import pandas as pd
+
+    row = pd.read_parquet(out / "episodes.parquet").iloc[0]
+    assert row["policy"] == "com-oracle" and row["peg_com_shift_mm"] == 20.0
+    assert row["grasp_success"] and abs(row["grasp_offset_com_mm"]) < 2.0
+
+
+@pytest.mark.slow
 def test_evaluate_and_report(tmp_path: Path) -> None:
     out = tmp_path / "eval"
     proc = vgs("evaluate", "--policy", "center", "--condition", "mass", "--episodes", "2",
