@@ -89,3 +89,17 @@ def test_grasp_positions_show_the_centre_of_mass_where_it_is_off_the_middle(
     h1 = matplotlib.image.imread(one).shape[0]
     h2 = matplotlib.image.imread(two).shape[0]
     assert h2 == 2 * h1
+
+
+def test_the_report_sets_each_learned_policy_against_the_references(tmp_path: Path) -> None:
+    """A folder that evaluated a reference policy gets the section "Against the reference
+    policies": one row per condition, reference and learned policy, on the same scenes."""
+    from vgs.analysis.report import build_report
+
+    folder = tmp_path / "report"
+    shutil.copytree(Path(__file__).parent / "data" / "report_small", folder)
+    text = build_report(folder).read_text()
+    section = text.split("## Against the reference policies")[1].split("\n## ")[0]
+    rows = [line for line in section.splitlines() if line.startswith("| ")][1:]
+    assert rows and all("| center |" in row for row in rows)
+    assert {row.split("|")[3].strip().split()[0] for row in rows} == {"baseline", "vgs"}

@@ -334,3 +334,44 @@ def write_regret(doc: Doc, items: list[Makeup], command: str) -> None:
                          f"{thi:+.2f}]", f"{np.mean([r.failures_vgs for r in regrets]):.1f} / "
                          f"{np.mean([r.failures_center for r in regrets]):.1f}"])
     doc.table(head, rows)
+
+
+def write_references(doc: Doc, df: pd.DataFrame, command: str) -> None:
+    """The section "Against the reference policies": each learned policy of each training run
+    against each reference policy evaluated in the same folder (``center``, ``com-oracle``,
+    ...) on the same scenes, by :func:`vgs.analysis.stats.regret`: the mean difference of the
+    times on the scenes both assembled (learned less reference, paired bootstrap 95 %
+    interval), the difference in total time over all tests, failed attempts included, and the
+    assemblies of each. Nothing is written when the folder holds no reference policy."""
+    rows = []
+    oracle = "com-oracle" in set(df["policy"])
+    for condition in [c for c in CONDITIONS if c in set(df["condition"])]:
+        part = df[df["condition"] == condition]
+        references = sorted(set(part["policy"]) - set(LEARNED))
+        pairs = condition_pairs(df, condition)
+        for ref in references:
+            mine = part[part["policy"] == ref].sort_values("index")
+            for run, *tables in pairs:
+                for policy, table in zip(LEARNED, tables, strict=True):
+                    if list(table["index"]) != list(mine["index"]):
+                        continue
+                    r = regret(mine, table)
+                    diff = _s(r.mean_s) + (f" [{_s(r.low)}, {_s(r.high)}]"
+                                           if math.isfinite(r.low) else "")
+                    rows.append([condition, ref, f"{policy} {run}".strip(" -"), str(r.n), diff,
+                                 r.total_pct.text(),
+                                 f"{len(table) - r.failures_vgs}/{len(table)} / "
+                                 f"{len(mine) - r.failures_center}/{len(mine)}"])
+    if not rows:
+        return
+    doc.h(2, "Against the reference policies")
+    doc.p(f"Made by `{command}`. Each learned policy against each reference policy on the same "
+          "test scenes: its time less the reference's, mean over the scenes both assembled [s] "
+          "(paired bootstrap 95 % interval; negative: the learned policy is faster); the same "
+          "in total time over all tests, failed attempts included, "
+          "100 (S_learned - S_reference) / S_reference; and the assemblies of each."
+          + (" `com-oracle` grasps at the true centre of mass (ground truth, analysis only)."
+             if oracle else ""))
+    doc.table(["condition", "reference", "learned policy", "scenes both assembled",
+               "time difference [s]", "difference in total time",
+               "assembled, learned / reference"], rows)

@@ -277,10 +277,10 @@ def build_report(out: Path, title: str | None = None, center: Path | None = None
     are (:func:`_reading_section`), the headline and the verdicts (:func:`_headline_section`),
     what the gain is made of and VGS's regret against the centre heuristic (from ``out``'s own
     centre evaluation, or ``center``, a results folder with one on the same test scenes:
-    :mod:`vgs.analysis.makeup`), one section per condition (:func:`_condition_section`), where
-    the policies grasp, the
-    training runs (:func:`_training_section`) and the grasp-position sweep
-    (:func:`_sweep_section`).
+    :mod:`vgs.analysis.makeup`), each learned policy against the reference policies ``out``
+    evaluated (``center``, ``com-oracle``), one section per condition
+    (:func:`_condition_section`), where the policies grasp, the training runs
+    (:func:`_training_section`) and the grasp-position sweep (:func:`_sweep_section`).
 
     Raises:
         ConfigError: If ``out`` holds no evaluation results, or ``center`` no centre evaluation
@@ -289,7 +289,7 @@ def build_report(out: Path, title: str | None = None, center: Path | None = None
     meta = read_json(out / "reproduce.json") if (out / "reproduce.json").exists() else {}
     df = load_results(out)
     _check_inputs(out)  # every file read below, before anything is written
-    from vgs.analysis.makeup import makeups, write_makeup, write_regret
+    from vgs.analysis.makeup import makeups, write_makeup, write_references, write_regret
 
     centre = load_center(center, df) if center is not None else None
     figures = out / "figures"
@@ -311,6 +311,7 @@ def build_report(out: Path, title: str | None = None, center: Path | None = None
     parts = makeups(df, centre)
     write_makeup(doc, parts, command)
     write_regret(doc, parts, command)
+    write_references(doc, df, command)
     for condition in [c for c in CONDITIONS if c in set(table["condition"])]:
         _condition_section(doc, df, table, condition, figures)
     if PAPER["nominal"]:
