@@ -1,5 +1,11 @@
-"""The build hook that records the source revision in a wheel (the rest of the build is in
-pyproject.toml).
+"""The build hooks: the per-tick kernels in C, and the source revision recorded in a wheel (the
+rest of the build is in pyproject.toml).
+
+``vgs._native`` (``src/vgs/_native.c``) is compiled against the headers of the pinned MuJoCo
+wheel (a build requirement, pyproject.toml) and linked to its ``libmujoco``; the flags keep every
+double operation rounded once, in the written order (no fused multiply-add, no fast-math, libm
+calls as CPython makes them), so that its ticks give the same bits as the Python floats they
+replace on every x86-64 CPU (``src/vgs/native.py``).
 
 ``build_py`` writes ``vgs/build_info.json`` (``{"source_revision": ...}``) into the build, never
 into ``src/``: the commit of the checkout being built (``+modified`` when ``src/`` differs from
@@ -15,7 +21,7 @@ import json
 from pathlib import Path
 from types import ModuleType
 
-from setuptools import setup
+from setuptools import Extension, setup
 from setuptools.command.build_py import build_py
 
 ROOT = Path(__file__).resolve().parent
@@ -44,4 +50,29 @@ class BuildPyWithRevision(build_py):
         target.write_text(json.dumps({"source_revision": source}) + "\n")
 
 
-setup(cmdclass={"build_py": BuildPyWithRevision})
+# Exact IEEE double arithmetic in the order written (see the module docstring).
+EXACT_FLOATS = ["-O2", "-ffp-contract=off", "-fno-fast-math", "-fno-builtin", "-std=c11"]
+
+
+def native_extension() -> Extension:
+    """``vgs._native``, built against the installed (build-time) MuJoCo wheel."""
+    import mujoco  # the build requirement pinned in pyproject.toml
+
+    root = Path(mujoco.__file__).resolve().parent
+    library = sorted(root.glob("libmujoco.so*"))
+    if not library:
+        raise RuntimeError(f"no libmujoco in {root}: vgs needs MuJoCo's Linux wheel to build")
+    return Extension(
+        "vgs._native",
+        sources=["src/vgs/_native.c"],
+        include_dirs=[str(root / "include")],
+        extra_compile_args=EXACT_FLOATS,
+        # Link to MuJoCo's library by its file name (its soname): vgs.native imports mujoco
+        # first, so the loader finds it already loaded; the run path covers a plain install.
+        library_dirs=[str(root)],
+        libraries=[":" + library[0].name],
+        runtime_library_dirs=["$ORIGIN/../mujoco"],
+    )
+
+
+setup(cmdclass={"build_py": BuildPyWithRevision}, ext_modules=[native_extension()])

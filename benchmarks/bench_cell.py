@@ -25,10 +25,9 @@ The same episodes then run a second time with a wall-clock timer around each par
 control tick, to split the Python per tick (us per tick; the timers' own cost, calibrated on an
 empty function, is removed; the parts' sum is this second run's Python per tick):
 
-* ``arm``: the arm's admittance and inverse kinematics (``ArmController.update`` less its
-  F/T read);
-* ``F/T``: the sensor model and the wrench at the TCP (``ArmController.read_ft``);
-* ``latch``: the pads' stick latch after the physics steps (``PadStiction.update``);
+* ``arm``: the arm's tick, F/T sample and wrench at the TCP, admittance and inverse kinematics
+  (``ArmController.update``; in C, ``vgs.native.arm_update``, with the noise block's draw);
+* ``latch``: the pads' stick latch after the physics steps (``PadStiction.update``; in C);
 * ``watch``: the record's grasp watch (the robot's observers, ``GraspWatch``);
 * ``state machine``: the grasp and assembly primitives between ticks (``grasp`` and
   ``AssemblyModule.run`` less their ticks);
@@ -272,7 +271,7 @@ def timer_cost(calls: int = 100_000, repeats: int = 5) -> tuple[float, float]:
     return max(inside, 0.0), added
 
 
-TICK_PARTS = ("arm", "F/T", "latch", "watch", "state machine", "rest")
+TICK_PARTS = ("arm", "latch", "watch", "state machine", "rest")
 
 
 def tick_split(episodes: int, cfg: ExperimentConfig, seed: int) -> tuple[dict[str, float], int]:
@@ -280,11 +279,10 @@ def tick_split(episodes: int, cfg: ExperimentConfig, seed: int) -> tuple[dict[st
     :func:`assemblies`), from wall-clock timers around the parts; and the ticks."""
     runner = EpisodeRunner(cfg)
     _, camera = runner.cell(cfg.cell.peg)
-    names = ("update", "ft", "latch", "watch", "tick", "mj_step", "camera", "grasp", "run")
+    names = ("update", "latch", "watch", "tick", "mj_step", "camera", "grasp", "run")
     p = {name: Part() for name in names}
     replacements = [
         (ArmController, "update", _timed_part(ArmController.update, p["update"])),
-        (ArmController, "read_ft", _timed_part(ArmController.read_ft, p["ft"])),
         (PadStiction, "update", _timed_part(PadStiction.update, p["latch"])),
         (GraspWatch, "__call__", _timed_part(GraspWatch.__call__, p["watch"])),
         (Robot, "tick", _timed_part(Robot.tick, p["tick"])),
@@ -306,10 +304,8 @@ def tick_split(episodes: int, cfg: ExperimentConfig, seed: int) -> tuple[dict[st
         """Seconds of ``name`` less its own timer's share."""
         return p[name].seconds - p[name].calls * inside
 
-    ft = own("ft")
     split = {
-        "arm": own("update") - ft - p["ft"].calls * (added - inside),
-        "F/T": ft,
+        "arm": own("update"),
         "latch": own("latch"),
         "watch": own("watch"),
         "state machine": sum(own(n) - p[n].inner_calls * (added - inside)

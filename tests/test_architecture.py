@@ -19,14 +19,16 @@ MAY_IMPORT: dict[str, set[str]] = {
     "columns": set(),
     "perception": set(),
     "vecmath": set(),
+    "native": set(),
     "config": {"errors"},
     "validate": {"errors"},
     "checkpoint": {"errors", "jsonsafe"},
-    "sim": {"errors", "config", "vecmath"},
+    "sim": {"errors", "config", "vecmath", "native"},
     "grasping": {"errors", "config", "perception"},
-    "control": {"errors", "config", "vecmath", "sim"},
+    "control": {"errors", "config", "vecmath", "native", "sim"},
     "render": {"errors", "config", "sim"},
-    "assembly": {"errors", "columns", "config", "perception", "vecmath", "sim", "control"},
+    "assembly": {"errors", "columns", "config", "perception", "vecmath", "native", "sim",
+                 "control"},
     "revision": set(),
     "runfolder": {"errors", "jsonsafe", "columns", "config", "validate", "checkpoint",
                   "grasping", "revision"},
@@ -47,10 +49,14 @@ MAY_IMPORT: dict[str, set[str]] = {
 }
 
 
+# A compiled module belongs to the unit of its Python face (vgs._native, from _native.c).
+COMPILED = {"_native": "native"}
+
+
 def _unit(module: str) -> str:
     """``vgs.sim.cell`` -> ``sim``; ``vgs.config`` -> ``config``; ``vgs`` -> ``vgs``."""
     parts = module.split(".")
-    return parts[1] if len(parts) > 1 else "vgs"
+    return COMPILED.get(parts[1], parts[1]) if len(parts) > 1 else "vgs"
 
 
 def _module_name(path: Path) -> str:
@@ -67,7 +73,8 @@ def _imports(path: Path) -> set[str]:
         elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
             if node.module == "vgs":
                 found |= {f"vgs.{a.name}" if (ROOT / f"{a.name}.py").exists()
-                          or (ROOT / a.name).is_dir() else "vgs" for a in node.names}
+                          or (ROOT / f"{a.name}.c").exists() or (ROOT / a.name).is_dir()
+                          else "vgs" for a in node.names}
             elif node.module.split(".")[0] == "vgs":
                 found.add(node.module)
     return found

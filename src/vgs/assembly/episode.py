@@ -11,9 +11,9 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
-import mujoco
 import numpy as np
 
+from vgs import native
 from vgs import vecmath as vm
 from vgs.assembly.grasp import grasp
 from vgs.assembly.record import EpisodeRecord
@@ -141,7 +141,8 @@ class GraspWatch:
     A contact ``i`` on the peg pushes it with the force ``f_i = C_i^T f_c`` (world frame, from
     its contact frame ``C_i``) at ``p_i``, and with a torsional torque ``t_c n_i`` about its
     normal; its moment about the TCP is ``(p_i - p_tcp) x f_i + t_c n_i``, of which the record
-    takes the component along the pinch axis (plain floats, :mod:`vgs.vecmath`).
+    takes the component along the pinch axis (in C, :func:`vgs.native.watch_sample`, in
+    :mod:`vgs.vecmath`'s order of operations).
     """
 
     def __init__(self, robot: Robot, every: int = 4) -> None:
@@ -150,73 +151,33 @@ class GraspWatch:
         self.every = every
         self._n = 0
         d, ids, m = self.cell.data, self.cell.ids, self.cell.model
-        # Views into the simulator's state, made once.
-        self._R_world_tcp = d.site_xmat[ids.tcp_site]  # flat, row-major views
-        self._p_world_tcp = d.site_xpos[ids.tcp_site]
-        self._R_world_peg = d.xmat[ids.peg_body]
-        self._R0 = self._relative()
-        self.turn_deg = 0.0
-        self.peak_moment = 0.0
-        self._f = np.zeros(6)
         finger_bodies = {int(m.geom_bodyid[g]) for g in ids.pad_geoms}
-        self._is_finger = [int(m.geom_bodyid[g]) in finger_bodies for g in range(m.ngeom)]
-        self._peg = int(ids.peg_geom)
+        is_finger = bytes(int(m.geom_bodyid[g]) in finger_bodies for g in range(m.ngeom))
+        latch = self.cell.stiction._native if self.cell.stiction is not None else None
+        # (turn_deg, peak_moment, the peg's axis in the tool frame at the start), kept by the C
+        # sample (vgs.native.watch_sample, the formulas of the class docstring).
+        self._out = np.zeros(5)
+        self._native = native.watch_new(
+            m._address, d._address, (int(ids.peg_body), int(ids.tcp_site), int(ids.peg_geom)),
+            is_finger, latch, self._out)
 
-    def _relative(self) -> vm.Vec3:
-        """The peg's axis in the tool frame, ``R_world_tcp^T a_world`` (its spin about its own
-        axis does not matter)."""
-        R_peg = self._R_world_peg.tolist()
-        return vm.mtv(tuple(self._R_world_tcp.tolist()), (R_peg[2], R_peg[5], R_peg[8]))
+    @property
+    def turn_deg(self) -> float:
+        """The largest angle between the peg's axis in the tool frame and its axis at the start
+        [deg]: ``acos(a . a_0)``, ``a = R_world_tcp^T a_world``."""
+        return float(self._out[0])
+
+    @property
+    def peak_moment(self) -> float:
+        """The largest sampled moment about the pinch axis on the peg [N m]."""
+        return float(self._out[1])
 
     def __call__(self) -> None:
         if self.robot.phase == "release":
             return
         self._n += 1
         if self._n % self.every == 0:
-            self._sample()
-
-    def _sample(self) -> None:
-        """One sample: the peg's turn in the pads and the moment on it about the pinch axis."""
-        cos = vm.dot(self._relative(), self._R0)
-        self.turn_deg = max(self.turn_deg,
-                            math.degrees(math.acos(max(-1.0, min(1.0, cos)))))
-        m, d = self.cell.model, self.cell.data
-        if d.ncon == 0:
-            return
-        con = d.contact
-        peg, is_finger = self._peg, self._is_finger
-        geom = con.geom.tolist()
-        rows = [i for i, (g0, g1) in enumerate(geom)
-                if (g0 == peg or g1 == peg) and (is_finger[g0] or is_finger[g1])]
-        if not rows:
-            return
-        frames, dims, pos = con.frame, con.dim.tolist(), con.pos
-        tx, ty, tz = self._p_world_tcp.tolist()
-        pinch = vm.column(tuple(self._R_world_tcp.tolist()), 1)
-        f_c = self._f
-        moment = 0.0
-        for i in rows:
-            mujoco.mj_contactForce(m, d, i, f_c)
-            frame = tuple(frames[i].tolist())  # rows: normal, tangents (world)
-            forces = f_c.tolist()
-            # The force on geom2, world frame: C^T f_c.
-            fx, fy, fz = vm.mtv(frame, forces[:3])
-            # Torsional friction: a torque about the contact normal (frame's first row).
-            if dims[i] >= 4:
-                t_c = forces[3]
-                tau = (t_c * frame[0], t_c * frame[1], t_c * frame[2])
-            else:
-                tau = (0.0, 0.0, 0.0)
-            sign = -1.0 if geom[i][0] == peg else 1.0
-            px, py, pz = pos[i].tolist()
-            rx, ry, rz = px - tx, py - ty, pz - tz
-            torque = ((ry * fz - rz * fy) + tau[0], (rz * fx - rx * fz) + tau[1],
-                      (rx * fy - ry * fx) + tau[2])
-            moment += sign * vm.dot(torque, pinch)
-        if self.cell.stiction is not None and self.cell.stiction.stuck:
-            # What the pads' stick state carries beyond their contacts' friction.
-            moment += float(self.cell.stiction.weld_wrench()[1][1])
-        self.peak_moment = max(self.peak_moment, abs(moment))
+            native.watch_sample(self._native)
 
 
 class EpisodeRunner:

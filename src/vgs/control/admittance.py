@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from vgs import native
 from vgs.config import ControllerConfig
 
 K_FORCE_REF = np.array([2.0e4, 2.0e4, 2.0e4, 40.0, 40.0, 40.0])
@@ -39,12 +40,9 @@ class Admittance:
         self.velocity = np.zeros(6)
         self.wrench_des = np.zeros(6)
         self.vmax = np.array([cfg.max_speed] * 3 + [cfg.max_angular_speed] * 3)
-        # Per-axis constants as Python floats, cached per dt (set_stiffness clears them).
-        self._denom_t: list[float] = []
-        self._stiff_t: list[float] = []
-        self._mass_t: list[float] = []
-        self._vmax_t: list[float] = []
-        self._denom_dt = -1.0
+        # Filled in place (set_stiffness), never replaced: the arm's C tick holds their data.
+        self.stiffness = np.zeros(6)
+        self.damping = np.zeros(6)
         self.set_stiffness(np.array([cfg.trans_stiffness] * 3 + [cfg.rot_stiffness] * 3))
 
     def set_stiffness(self, stiffness: np.ndarray, damping: np.ndarray | None = None) -> None:
@@ -56,19 +54,19 @@ class Admittance:
         stiffness = np.asarray(stiffness, dtype=float)
         if stiffness.shape != (6,) or np.any(stiffness < 0):
             raise ValueError("stiffness needs six values >= 0")
-        self.stiffness = stiffness
         k_eff = np.where(stiffness > 0, stiffness, K_FORCE_REF)
-        self.damping = 2.0 * self.cfg.damping_ratio * np.sqrt(k_eff * self.mass)
+        d = 2.0 * self.cfg.damping_ratio * np.sqrt(k_eff * self.mass)
         # Force-controlled translation axes use the configured force damping (>= the servo-loop
         # minimum above).
         force_axes = (stiffness == 0) & (np.arange(6) < 3)
-        self.damping[force_axes] = np.maximum(self.damping[force_axes], self.cfg.force_damping)
+        d[force_axes] = np.maximum(d[force_axes], self.cfg.force_damping)
         if damping is not None:
             damping = np.asarray(damping, dtype=float)
             if damping.shape != (6,) or np.any(damping <= 0):
                 raise ValueError("damping needs six values > 0 (NaN: keep)")
-            self.damping = np.where(np.isnan(damping), self.damping, damping)
-        self._denom_dt = -1.0  # M + D dt must be recomputed
+            d = np.where(np.isnan(damping), d, damping)
+        self.stiffness[:] = stiffness
+        self.damping[:] = d
 
     def reset(self) -> None:
         self.offset[:] = 0.0
@@ -78,30 +76,15 @@ class Admittance:
     def step(self, wrench_ext: np.ndarray, dt: float) -> np.ndarray:
         """Advance the offset by ``dt`` (semi-implicit Euler, damping implicit) and return it.
 
-        Per axis, on Python floats::
+        Per axis (in C, :func:`vgs.native.admittance_step`; the arm's tick runs the same)::
 
             f = ((w_des - K e) + w_ext) dt
-            v = (M v + f) / (M + D dt),   clipped to +-v_max
+            v = (M v + f) / (D dt + M),   clipped to +-v_max
             e = e + v dt
 
         ``(M + D dt) v_new = M v + f``: unconditionally stable in the damping term.
         """
-        if dt != self._denom_dt:
-            self._denom_t = [d * dt + m for d, m in zip(self.damping.tolist(),
-                                                        self.mass.tolist(), strict=True)]
-            self._stiff_t = self.stiffness.tolist()
-            self._mass_t = self.mass.tolist()
-            self._vmax_t = self.vmax.tolist()
-            self._denom_dt = dt
-        K, M, den, vmax = self._stiff_t, self._mass_t, self._denom_t, self._vmax_t
-        e, v = self.offset.tolist(), self.velocity.tolist()
-        wd, w = self.wrench_des.tolist(), wrench_ext.tolist()
-        for i in range(6):
-            vi = (v[i] * M[i] + ((wd[i] - K[i] * e[i]) + w[i]) * dt) / den[i]
-            vm = vmax[i]
-            vi = max(min(vi, vm), -vm)
-            v[i] = vi
-            e[i] = e[i] + vi * dt
-        self.velocity[:] = v
-        self.offset[:] = e
+        native.admittance_step(self.offset, self.velocity, self.wrench_des, self.stiffness,
+                               self.damping, self.mass, self.vmax,
+                               np.ascontiguousarray(wrench_ext, dtype=float), dt)
         return self.offset

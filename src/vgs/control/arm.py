@@ -23,6 +23,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+from vgs import native
 from vgs import vecmath as vm
 from vgs.config import ControllerConfig
 from vgs.control.admittance import Admittance
@@ -39,9 +40,12 @@ MAX_JOINT_SPEED = np.pi
 class ArmController:
     """Cartesian admittance control of the UR5 through its joint servos.
 
-    The per-tick maths is written on Python floats (:mod:`vgs.vecmath`) and MuJoCo's own
-    routines (``mju_mulMatTMat``, ``mju_mulMatTVec``, ``mju_cholFactor``, ``mju_cholSolve``),
-    never numpy's BLAS products, so that a tick gives the same bits on every CPU.
+    A tick (:meth:`update`) runs in C (:func:`vgs.native.arm_update`): the formulas of this
+    module's docstring in :mod:`vgs.vecmath`'s order of operations and MuJoCo's own routines
+    (``mj_kinematics``, ``mj_jacSite``, ``mju_mulMatTMat``, ``mju_mulMatTVec``,
+    ``mju_cholFactor``, ``mju_cholSolve``), never numpy's BLAS products, so that a tick gives
+    the same bits on every CPU. Its state lives in this object's numpy arrays, which the C reads
+    and writes in place.
 
     Args:
         cell: The simulated cell (the controller touches only joint state, actuators and the
@@ -59,42 +63,47 @@ class ArmController:
         self.wrench = np.zeros(6)  # tared external wrench at the TCP, world frame
         self.wrench_sensor = np.zeros(6)  # tared external wrench, sensor frame
         self.compliant = False  # False: the F/T signal does not drive the admittance
-        self._scratch = mujoco.MjData(m)
-        # Views and work arrays reused every tick.
+        self._scratch = mujoco.MjData(m)  # the IK's kinematic model, on the commanded joints
         self._qpos = _block(d.qpos, ids.arm_qpos)
-        self._ctrl = _block(d.ctrl, ids.arm_act)
-        self._sqpos = _block(self._scratch.qpos, ids.arm_qpos)
         self._tcp_xpos = d.site_xpos[ids.tcp_site]
         self._tcp_xmat = d.site_xmat[ids.tcp_site]
         self._ft_xpos = d.site_xpos[ids.ft_site]
         self._ft_xmat = d.site_xmat[ids.ft_site]
-        self._s_tcp_xpos = self._scratch.site_xpos[ids.tcp_site]
-        self._s_tcp_xmat = self._scratch.site_xmat[ids.tcp_site]
-        self._model, self._tcp_site = m, ids.tcp_site
         if ids.ft_torque_adr != ids.ft_force_adr + 3:
             raise ValueError("the F/T force and torque sensors must be adjacent")
-        self._raw = d.sensordata[ids.ft_force_adr:ids.ft_force_adr + 6]
-        self._jac = np.zeros((6, m.nv))  # rows: translation, rotation
-        self._jac_p, self._jac_r = self._jac[:3], self._jac[3:]
-        self._J_view = _block(self._jac.T, ids.arm_dof).T  # follows mj_jacSite's output
-        self._J = np.zeros((6, 6))  # its contiguous copy, MuJoCo's routines' operand
-        self._err = np.zeros(6)
-        self._H = np.zeros((6, 6))
-        self._g = np.zeros(6)
-        self._dq = np.zeros(6)
-        self._damp = DLS_LAMBDA**2 * np.eye(6)
-        p, R = self.tcp_pose_t()
-        self._p_ref: vm.Vec3 = p
-        self._R_ref: vm.Mat3 = R
+        # The reference pose (p_world_ref, then R_world_ref flat, row-major).
+        self._ref = np.zeros(12)
+        self._ref[:3], self._ref[3:] = self._tcp_xpos, self._tcp_xmat
         self.q_cmd = self.joint_positions()
-        # Gravity compensation of the payload below the sensor (see tare()).
+        # Gravity compensation of the payload below the sensor (see tare()): its mass, centre
+        # of mass (sensor frame), whether it is compensated (0/1) and the weight wrench at the
+        # tare, W_g(R_tare).
         self._tool_mass, self._tool_com = tool_inertial(cell)
         self._p_ft_tcp = vm.mtv(vm.mat3(self._ft_xmat),
                                 vm.sub(self._tcp_xpos.tolist(), self._ft_xpos.tolist()))
-        self.payload_mass = self._tool_mass
-        self.payload_com: vm.Vec3 = self._tool_com
-        self._g_tare: tuple[float, ...] = (0.0,) * 6
-        self._compensate = False
+        self._payload = np.zeros(11)
+        self._payload[0], self._payload[1:4] = self._tool_mass, self._tool_com
+        adm, ft = self.admittance, self.ft
+        arm_dof, arm_act = _block(np.arange(m.nv), ids.arm_dof), _block(np.arange(m.nu),
+                                                                      ids.arm_act)
+        self._native = native.arm_new(
+            m._address, d._address, self._scratch._address,
+            (int(ids.tcp_site), int(ids.ft_site), int(ids.arm_qpos[0]), int(arm_act[0]),
+             int(arm_dof[0]), int(ids.ft_force_adr), IK_ITERATIONS),
+            (DLS_LAMBDA**2, MAX_JOINT_SPEED, GRAVITY),
+            (self._ref, adm.offset, adm.velocity, adm.wrench_des, adm.stiffness, adm.damping,
+             adm.mass, adm.vmax, ft.filtered, ft.tare_offset, self._payload, self.wrench,
+             self.wrench_sensor, self.q_cmd, ft.noise, ft.state))
+
+    @property
+    def payload_mass(self) -> float:
+        """Mass compensated below the sensor [kg] (tool, and a held peg after set_payload)."""
+        return float(self._payload[0])
+
+    @property
+    def payload_com(self) -> vm.Vec3:
+        """Its centre of mass in the sensor frame [m]."""
+        return vm.vec3(self._payload[1:4])
 
     def set_payload(self, peg_mass: float) -> None:
         """Compensate a held peg of ``peg_mass`` as if its centre of mass lay at the TCP (the
@@ -103,19 +112,15 @@ class ArmController:
         m = self._tool_mass + peg_mass
         mt = self._tool_mass
         c, p = self._tool_com, self._p_ft_tcp
-        self.payload_com = ((mt * c[0] + peg_mass * p[0]) / m, (mt * c[1] + peg_mass * p[1]) / m,
-                            (mt * c[2] + peg_mass * p[2]) / m)
-        self.payload_mass = m
+        self._payload[1:4] = ((mt * c[0] + peg_mass * p[0]) / m,
+                              (mt * c[1] + peg_mass * p[1]) / m, (mt * c[2] + peg_mass * p[2]) / m)
+        self._payload[0] = m
 
-    def _gravity_wrench(self) -> tuple[float, float, float, float, float, float]:
+    def gravity_wrench(self) -> tuple[float, float, float, float, float, float]:
         """The payload's weight as an external wrench on the tool, sensor frame:
         ``f = R_world_ft^T (0, 0, -m g)`` (the third row of ``R_world_ft`` times ``-m g``),
-        ``tau = c x f``."""
-        w = -GRAVITY * self.payload_mass
-        zx, zy, zz = self._ft_xmat[6:9].tolist()
-        gx, gy, gz = w * zx, w * zy, w * zz
-        cx, cy, cz = self.payload_com
-        return gx, gy, gz, cy * gz - cz * gy, cz * gx - cx * gz, cx * gy - cy * gx
+        ``tau = c x f`` (in C, as the tick compensates it)."""
+        return native.arm_gravity_wrench(self._native)
 
     def tare(self) -> None:
         """Zero the F/T sensor here and compensate the payload's weight from now on.
@@ -129,8 +134,8 @@ class ArmController:
         contact moment.
         """
         self.ft.tare()
-        self._g_tare = self._gravity_wrench()
-        self._compensate = True
+        self._payload[5:11] = self.gravity_wrench()
+        self._payload[4] = 1.0
 
     def set_compliant(self, on: bool) -> None:
         """Let the F/T signal drive the admittance (True) or hold the reference stiffly."""
@@ -155,107 +160,51 @@ class ArmController:
     def joint_positions(self) -> np.ndarray:
         return self._qpos.copy()
 
-    def read_ft(self) -> np.ndarray:
-        """Sample the F/T sensor; update and return the world-frame wrench at the TCP.
-
-        The sensor's wrench, less the change of the payload's weight since the tare
-        (``(w - W_g(R)) + W_g(R_tare)``), is turned into the world frame by ``R_world_ft`` and
-        moved from the sensor's origin to the TCP: ``tau_tcp = tau_ft + (p_ft - p_tcp) x f``
-        (plain floats)."""
-        w = self.ft.sample(self._raw)
-        if self._compensate:
-            g, t = self._gravity_wrench(), self._g_tare
-            w = ((w[0] - g[0]) + t[0], (w[1] - g[1]) + t[1], (w[2] - g[2]) + t[2],
-                 (w[3] - g[3]) + t[3], (w[4] - g[4]) + t[4], (w[5] - g[5]) + t[5])
-        self.wrench_sensor[:] = w
-        R_world_ft = tuple(self._ft_xmat.tolist())
-        f0, f1, f2 = vm.mv(R_world_ft, w[0:3])
-        m0, m1, m2 = vm.mv(R_world_ft, w[3:6])
-        x0, x1, x2 = self._ft_xpos.tolist()
-        y0, y1, y2 = self._tcp_xpos.tolist()
-        r0, r1, r2 = x0 - y0, x1 - y1, x2 - y2
-        self.wrench[:] = (f0, f1, f2, m0 + (r1 * f2 - r2 * f1), m1 + (r2 * f0 - r0 * f2),
-                          m2 + (r0 * f1 - r1 * f0))
-        return self.wrench
-
     # -- commands ---------------------------------------------------------------------------
 
     @property
     def p_ref(self) -> np.ndarray:
         """The reference position ``p_world_ref`` [m] (a fresh array)."""
-        return np.array(self._p_ref)
+        return self._ref[:3].copy()
 
     @property
     def R_ref(self) -> np.ndarray:
         """The reference attitude ``R_world_ref`` (a fresh 3x3 array)."""
-        return vm.array3(self._R_ref)
+        return self._ref[3:].reshape(3, 3).copy()
 
     @property
     def reference_t(self) -> tuple[vm.Vec3, vm.Mat3]:
         """The reference pose as plain floats."""
-        return self._p_ref, self._R_ref
+        ref = self._ref.tolist()
+        return tuple(ref[:3]), tuple(ref[3:])  # type: ignore[return-value]
 
     def set_reference(self, p: np.ndarray | vm.Vec3, R: np.ndarray | vm.Mat3) -> None:
         """Set the reference pose (arrays, or a 3-tuple and a flat 9-tuple)."""
-        self._p_ref = p if isinstance(p, tuple) else vm.vec3(p)
-        self._R_ref = R if isinstance(R, tuple) else vm.mat3(R)
+        self._ref[:3] = p
+        self._ref[3:] = R if isinstance(R, tuple) else np.ravel(R)
 
-    def _commanded_t(self) -> tuple[vm.Vec3, vm.Mat3]:
+    def commanded_t(self) -> tuple[vm.Vec3, vm.Mat3]:
         """``(p_cmd, R_cmd)``: the reference displaced by the compliant offset,
         ``p_ref + e_p`` and ``exp([e_r]_x) R_ref`` (``R_ref`` itself while ``e_r`` is zero, as
-        it is whenever the arm is not compliant)."""
-        e0, e1, e2, rx, ry, rz = self.admittance.offset.tolist()
-        px, py, pz = self._p_ref
-        p = (px + e0, py + e1, pz + e2)
-        if rx == 0.0 and ry == 0.0 and rz == 0.0:
-            return p, self._R_ref
-        return p, vm.mm(vm.exp_so3((rx, ry, rz)), self._R_ref)
+        it is whenever the arm is not compliant), as plain floats (the C tick's own)."""
+        return native.arm_commanded(self._native)
 
     def absorb_offset(self) -> None:
         """Move the compliant offset into the reference (the commanded pose is unchanged)."""
-        self._p_ref, self._R_ref = self._commanded_t()
+        p, R = self.commanded_t()
+        self._ref[:3], self._ref[3:] = p, R
         self.admittance.offset[:] = 0.0
         self.admittance.velocity[:] = 0.0
 
     def update(self, dt: float) -> None:
-        """One control tick: F/T -> admittance -> IK -> joint targets."""
-        self.read_ft()
-        if self.compliant:
-            self.admittance.step(self.wrench, dt)
-        (px, py, pz), R_cmd = self._commanded_t()
-        m, sd, site = self._model, self._scratch, self._tcp_site
-        J, H, g, dq, err = self._J, self._H, self._g, self._dq, self._err
-        step_max = MAX_JOINT_SPEED * dt
-        q = self.q_cmd
-        for k in range(IK_ITERATIONS):
-            self._sqpos[:] = q
-            mujoco.mj_kinematics(m, sd)
-            if k == 0:
-                # Jacobian at the first iterate; the later Newton steps reuse it and its
-                # factorisation (a chord step: |dq| <= pi dt per joint, so J barely changes).
-                mujoco.mj_comPos(m, sd)
-                mujoco.mj_jacSite(m, sd, self._jac_p, self._jac_r, site)
-                J[:] = self._J_view
-                # Damped least squares: dq = (J^T J + lambda^2 I)^-1 J^T err, Cholesky-factored
-                # (the matrix is symmetric positive definite); MuJoCo's own products.
-                mujoco.mju_mulMatTMat(H, J, J)
-                H += self._damp
-                mujoco.mju_cholFactor(H, 0.0)
-            x, y, z = self._s_tcp_xpos.tolist()
-            # Attitude error log(R_cmd R(q)^T).
-            rx, ry, rz = vm.log_so3(vm.mmt(R_cmd, tuple(self._s_tcp_xmat.tolist())))
-            e = (px - x, py - y, pz - z, rx, ry, rz)
-            err[:] = e
-            mujoco.mju_mulMatTVec(g, J, err)
-            mujoco.mju_cholSolve(dq, H, g)
-            steps = dq.tolist()
-            if max(steps) > step_max or min(steps) < -step_max:  # clip only where it acts
-                np.minimum(dq, step_max, out=dq)
-                np.maximum(dq, -step_max, out=dq)
-            q += dq
-            if max(e) < 1e-7 and min(e) > -1e-7:
-                break
-        self._ctrl[:] = q
+        """One control tick: F/T -> admittance -> IK -> joint targets (module docstring), in C:
+        the sensor's sample, the payload's compensation and the wrench at the TCP
+        (:attr:`wrench`, :attr:`wrench_sensor`), the admittance step while :attr:`compliant`,
+        ``IK_ITERATIONS`` damped least-squares steps from :attr:`q_cmd` on the scratch data
+        (the Jacobian and its Cholesky factor from the first), each clipped to
+        ``MAX_JOINT_SPEED dt`` per joint, stopping early once every error component is under
+        1e-7; then the servo targets."""
+        native.arm_update(self._native, dt, self.ft.next_row(), self.compliant)
 
 
 def tool_inertial(cell: Cell) -> tuple[float, vm.Vec3]:

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from vgs import native
 from vgs.config import CameraConfig
 
 OVERSAMPLE = 2
@@ -77,40 +78,25 @@ class RayCastCamera:
         self.dist = np.zeros(self.nray)
         self.normal = np.zeros(3 * self.nray)
         self.geomgroup = np.array([1, 0, 0, 0, 0, 0], dtype=np.uint8)
-        self._vec3 = self.vec.reshape(-1, 3)
-        self._normal3 = self.normal.reshape(-1, 3)
+        self._depth = np.zeros(cfg.size * cfg.size)
+        self._color = np.zeros((cfg.size * cfg.size, 3))
 
     def capture(self, data: mujoco.MjData, rng: np.random.Generator | None = None) -> Heightmap:
         """Ray-cast the scene and return its heightmap."""
         cfg = self.cfg
         mujoco.mj_multiRay(self.model, data, self.origin, self.vec, self.geomgroup, 1, -1,
                            self.geomid, self.dist, self.normal, self.nray, 10.0)
-        # Ray indices that hit something and land inside the heightmap (index arrays: fewer
-        # passes over the ~200k rays than boolean masks of every per-ray quantity).
-        hit = np.flatnonzero(self.geomid >= 0)
-        pts = self._vec3[hit]
-        pts *= self.dist[hit, None]
-        pts += self.origin
         x0 = cfg.center_xy[0] - cfg.extent / 2
         y0 = cfg.center_xy[1] - cfg.extent / 2
-        col = np.floor((pts[:, 0] - x0) / cfg.pixel_size).astype(int)
-        row = np.floor((pts[:, 1] - y0) / cfg.pixel_size).astype(int)
-        ok = np.flatnonzero((row >= 0) & (row < cfg.size) & (col >= 0) & (col < cfg.size))
-        rays = hit[ok]
-        # Lambert shading n . l, element-wise (no BLAS product: the same bits on every CPU).
-        n = self._normal3[rays]
-        lit = n[:, 0] * _LIGHT[0] + n[:, 1] * _LIGHT[1] + n[:, 2] * _LIGHT[2]
-        shade = 0.55 + 0.45 * np.clip(lit, 0.0, 1.0)
-        rgb = self.model.geom_rgba[self.geomid[rays], :3] * shade[:, None]
-        z = np.maximum(pts[ok, 2], 0.0)
-        flat = row[ok] * cfg.size + col[ok]
-        # Keep the highest point per cell: sort by height, the last write wins.
-        order = np.argsort(z, kind="stable")
-        depth = np.zeros(cfg.size * cfg.size)
-        color = np.zeros((cfg.size * cfg.size, 3))
-        cells = flat[order]
-        depth[cells] = z[order]
-        color[cells] = rgb[order]
+        # Reprojection, in C (vgs.native.heightmap_fill): each ray's point p = v d + o falls
+        # into the cell (floor((y - y0) / s), floor((x - x0) / s)); a cell keeps its highest
+        # point (height clipped at the table, ties to the later ray) and its colour, the geom's
+        # times the Lambert shade 0.55 + 0.45 clip(n . l, 0, 1).
+        depth, color = self._depth, self._color
+        native.heightmap_fill(self.geomid, self.dist, self.vec, self.normal,
+                              self.model.geom_rgba, (*self.origin.tolist(), x0, y0, cfg.pixel_size,
+                                           *_LIGHT), cfg.size, self.model.ngeom, self.nray,
+                              depth, color)
         depth = depth.reshape(cfg.size, cfg.size)
         if cfg.depth_noise > 0 and rng is not None:
             depth = np.maximum(depth + rng.normal(0.0, cfg.depth_noise, depth.shape), 0.0)

@@ -21,6 +21,16 @@ NOISE_BLOCK = 256
 class FTSensor:
     """Noisy, filtered, tared wrist F/T sensor.
 
+    Each sample ``raw = (fx, fy, fz, tx, ty, tz)`` is filtered and tared, per component::
+
+        y <- y + ((raw + noise) - y) alpha      (y <- raw + noise at the first sample)
+        w  = tare - y                           (the tared external wrench, sensor frame)
+
+    with ``alpha = 1 - exp(-2 pi f_c dt)`` (first-order low-pass at ``cutoff_hz``; 1: none) and
+    ``noise ~ N(0, sigma^2)`` per component. The sample itself runs in C within the arm's tick
+    (:func:`vgs.native.arm_update`, in that order of operations); this object owns the
+    sensor's state: the filtered reading, the tare and the noise.
+
     Args:
         cfg: Sensor noise and filter settings.
         dt: Sample period [s] (the controller period).
@@ -35,44 +45,34 @@ class FTSensor:
         wc = 2 * math.pi * cfg.cutoff_hz
         self.alpha = 1.0 if cfg.cutoff_hz <= 0 else 1.0 - math.exp(-wc * dt)
         self.sigma = np.array([cfg.force_noise] * 3 + [cfg.torque_noise] * 3)
-        self.filtered: list[float] | None = None
-        self.tare_offset = [0.0] * 6
+        # The state the C sample reads and writes: (sampled yet: 0/1, alpha); the filtered
+        # reading y; the tare.
+        self.state = np.array([0.0, self.alpha])
+        self.filtered = np.zeros(6)
+        self.tare_offset = np.zeros(6)
         # Standard normal draws in blocks (one generator call per NOISE_BLOCK samples; the
         # sequence is the same as drawing six values per sample), scaled by sigma per block
         # (numpy's element-wise product rounds once per element, on every CPU).
-        self._block = np.zeros((NOISE_BLOCK, 6))
-        self._rows: list[list[float]] = []
+        self.noise = np.zeros((NOISE_BLOCK, 6))
         self._next = NOISE_BLOCK
 
-    def sample(self, raw: np.ndarray) -> tuple[float, float, float, float, float, float]:
-        """Feed one raw reading ``(fx, fy, fz, tx, ty, tz)`` and return the tared external wrench
-        in the sensor frame: ``y = y + alpha ((raw + noise) - y)``, ``w = tare - y`` (plain
-        floats)."""
+    def next_row(self) -> int:
+        """The row of :attr:`noise` the next sample adds (a fresh block every ``NOISE_BLOCK``
+        samples)."""
         if self._next == NOISE_BLOCK:
-            self.rng.standard_normal(out=self._block)
-            self._block *= self.sigma
-            self._rows = self._block.tolist()
+            self.rng.standard_normal(out=self.noise)
+            self.noise *= self.sigma
             self._next = 0
-        noise = self._rows[self._next]
+        row = self._next
         self._next += 1
-        r = raw.tolist()
-        noisy = [noise[0] + r[0], noise[1] + r[1], noise[2] + r[2], noise[3] + r[3],
-                 noise[4] + r[4], noise[5] + r[5]]
-        y = self.filtered
-        if y is None:
-            y = self.filtered = noisy
-        else:
-            a = self.alpha
-            for i in range(6):
-                y[i] += (noisy[i] - y[i]) * a
-        t = self.tare_offset
-        return (t[0] - y[0], t[1] - y[1], t[2] - y[2], t[3] - y[3], t[4] - y[4], t[5] - y[5])
+        return row
+
+    @property
+    def sampled(self) -> bool:
+        """Whether the sensor has been sampled since it was made."""
+        return bool(self.state[0])
 
     def tare(self) -> None:
         """Zero the sensor at the current (filtered) reading."""
-        if self.filtered is not None:
-            self.tare_offset = list(self.filtered)
-
-    def raw_filtered(self) -> np.ndarray:
-        """The filtered reading before taring (the wrench the flange exerts on the tool)."""
-        return np.zeros(6) if self.filtered is None else np.array(self.filtered)
+        if self.sampled:
+            self.tare_offset[:] = self.filtered
