@@ -182,6 +182,17 @@ static void* address(PyObject* o) {
     return p;
 }
 
+/* The state behind the first of ``n`` fast-call arguments, a capsule named ``name``, where
+ * there are ``want`` arguments; NULL with an exception set otherwise. */
+static void* state_of(PyObject* const* args, Py_ssize_t n, Py_ssize_t want, const char* name,
+                      const char* usage) {
+    if (n != want) {
+        PyErr_Format(PyExc_TypeError, "usage: %s", usage);
+        return NULL;
+    }
+    return PyCapsule_GetPointer(args[0], name);
+}
+
 /* ------------------------------------------------------------------------------------------
  * the arm: F/T sample -> payload compensation -> TCP wrench -> admittance -> IK
  * (control/arm.py, sim/ft_sensor.py, control/admittance.py)
@@ -407,11 +418,7 @@ static PyObject* py_arm_new(PyObject* self, PyObject* args) {
 
 /* arm_update(capsule, dt, noise_row, compliant) */
 static PyObject* py_arm_update(PyObject* self, PyObject* const* args, Py_ssize_t n) {
-    if (n != 4) {
-        PyErr_SetString(PyExc_TypeError, "arm_update(arm, dt, noise_row, compliant)");
-        return NULL;
-    }
-    Arm* a = (Arm*)PyCapsule_GetPointer(args[0], "vgs.arm");
+    Arm* a = state_of(args, n, 4, "vgs.arm", "arm_update(arm, dt, noise_row, compliant)");
     if (!a) return NULL;
     double dt = PyFloat_AsDouble(args[1]);
     long row = PyLong_AsLong(args[2]);
@@ -423,11 +430,7 @@ static PyObject* py_arm_update(PyObject* self, PyObject* const* args, Py_ssize_t
 
 /* arm_commanded(capsule, out): out[0:3] = p_cmd, out[3:12] = R_cmd */
 static PyObject* py_arm_commanded(PyObject* self, PyObject* const* args, Py_ssize_t n) {
-    if (n != 1) {
-        PyErr_SetString(PyExc_TypeError, "arm_commanded(arm)");
-        return NULL;
-    }
-    Arm* a = (Arm*)PyCapsule_GetPointer(args[0], "vgs.arm");
+    Arm* a = state_of(args, n, 1, "vgs.arm", "arm_commanded(arm)");
     if (!a) return NULL;
     double p[3], R[9];
     commanded(a, p, R);
@@ -437,11 +440,7 @@ static PyObject* py_arm_commanded(PyObject* self, PyObject* const* args, Py_ssiz
 
 /* arm_gravity_wrench(capsule) -> the payload's weight wrench, sensor frame */
 static PyObject* py_arm_gravity_wrench(PyObject* self, PyObject* const* args, Py_ssize_t n) {
-    if (n != 1) {
-        PyErr_SetString(PyExc_TypeError, "arm_gravity_wrench(arm)");
-        return NULL;
-    }
-    Arm* a = (Arm*)PyCapsule_GetPointer(args[0], "vgs.arm");
+    Arm* a = state_of(args, n, 1, "vgs.arm", "arm_gravity_wrench(arm)");
     if (!a) return NULL;
     double g[6];
     gravity_wrench(a, g);
@@ -689,11 +688,7 @@ static PyObject* py_latch_new(PyObject* self, PyObject* args) {
 }
 
 static PyObject* py_latch_update(PyObject* self, PyObject* const* args, Py_ssize_t n) {
-    if (n != 1) {
-        PyErr_SetString(PyExc_TypeError, "latch_update(latch)");
-        return NULL;
-    }
-    Latch* s = (Latch*)PyCapsule_GetPointer(args[0], "vgs.latch");
+    Latch* s = state_of(args, n, 1, "vgs.latch", "latch_update(latch)");
     if (!s) return NULL;
     if (latch_update(s) < 0) return PyErr_NoMemory();
     Py_RETURN_NONE;
@@ -710,11 +705,7 @@ static int weld_wrench(Latch* s, double* f, double* mom) {
 
 /* latch_weld_wrench(latch) -> ((fx, fy, fz), (mx, my, mz)) */
 static PyObject* py_latch_weld_wrench(PyObject* self, PyObject* const* args, Py_ssize_t n) {
-    if (n != 1) {
-        PyErr_SetString(PyExc_TypeError, "latch_weld_wrench(latch)");
-        return NULL;
-    }
-    Latch* s = (Latch*)PyCapsule_GetPointer(args[0], "vgs.latch");
+    Latch* s = state_of(args, n, 1, "vgs.latch", "latch_weld_wrench(latch)");
     if (!s) return NULL;
     double f[3], mom[3];
     if (weld_wrench(s, f, mom) < 0) return PyErr_NoMemory();
@@ -843,11 +834,7 @@ static PyObject* py_watch_new(PyObject* self, PyObject* args) {
 }
 
 static PyObject* py_watch_sample(PyObject* self, PyObject* const* args, Py_ssize_t n) {
-    if (n != 1) {
-        PyErr_SetString(PyExc_TypeError, "watch_sample(watch)");
-        return NULL;
-    }
-    Watch* w = (Watch*)PyCapsule_GetPointer(args[0], "vgs.watch");
+    Watch* w = state_of(args, n, 1, "vgs.watch", "watch_sample(watch)");
     if (!w) return NULL;
     if (watch_sample(w) < 0) return PyErr_NoMemory();
     Py_RETURN_NONE;
@@ -951,8 +938,12 @@ static PyMethodDef METHODS[] = {
     {NULL, NULL, 0, NULL},
 };
 
-static struct PyModuleDef MODULE = {PyModuleDef_HEAD_INIT, "vgs._native",
-                                    "The per-tick kernels in C (see src/vgs/native.py).", -1,
-                                    METHODS};
+static struct PyModuleDef MODULE = {
+    PyModuleDef_HEAD_INIT,
+    .m_name = "vgs._native",
+    .m_doc = "The per-tick kernels in C (see src/vgs/native.py).",
+    .m_size = -1,
+    .m_methods = METHODS,
+};
 
 PyMODINIT_FUNC PyInit__native(void) { return PyModule_Create(&MODULE); }
