@@ -753,6 +753,7 @@ static int watch_sample(Watch* w) {
     for (int i = 0; i < d->ncon; i++) {
         const mjContact* c = d->contact + i;
         int g0 = c->geom[0], g1 = c->geom[1];
+        if (g0 < 0 || g1 < 0) continue; /* a flex contact: no flex touches the pads here */
         if (!((g0 == peg || g1 == peg) && (w->is_finger[g0] || w->is_finger[g1]))) continue;
         any = 1;
         double fc[6], fw[3], tau[3] = {0.0, 0.0, 0.0};
