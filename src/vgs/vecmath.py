@@ -1,9 +1,11 @@
 """Plain-float maths on 3-vectors and 3x3 rotations: the same bits on every IEEE-754 machine.
 
-The per-tick maths of the cell and the controller runs here, not in numpy's products: numpy
-sends ``@``, ``np.dot`` and ``np.linalg.norm`` to OpenBLAS, whose kernels (chosen per CPU, or by
-``OPENBLAS_CORETYPE``) sum in other orders and with or without fused multiply-adds, and a
-contact-rich episode amplifies the last bit into another episode. CPython rounds once per
+The per-tick maths of the state machine runs here, and the kernels in C (``_native.c``: the
+arm's tick, the pads' latch, the grasp watch) follow these formulas in the same order; none of
+it runs in numpy's products: numpy sends ``@``, ``np.dot`` and ``np.linalg.norm`` to OpenBLAS,
+whose kernels (chosen per CPU, or by ``OPENBLAS_CORETYPE``) sum in other orders and with or
+without fused multiply-adds, and a contact-rich episode amplifies the last bit into another
+episode. CPython rounds once per
 operation on every IEEE machine, and each function below fixes its order of operations, so a
 result depends on its inputs alone.
 
