@@ -5,9 +5,8 @@ arm's tick, the pads' latch, the grasp watch) follow these formulas in the same 
 it runs in numpy's products: numpy sends ``@``, ``np.dot`` and ``np.linalg.norm`` to OpenBLAS,
 whose kernels (chosen per CPU, or by ``OPENBLAS_CORETYPE``) sum in other orders and with or
 without fused multiply-adds, and a contact-rich episode amplifies the last bit into another
-episode. CPython rounds once per
-operation on every IEEE machine, and each function below fixes its order of operations, so a
-result depends on its inputs alone.
+episode. CPython rounds once per operation on every IEEE machine, and each function below fixes
+its order of operations, so a result depends on its inputs alone.
 
 Conventions: a vector is a tuple ``(x, y, z)``; a matrix is a flat row-major 9-tuple
 ``(r00, r01, r02, r10, ..., r22)`` (a flat tuple unpacks in one step). Poses are named after
