@@ -24,6 +24,7 @@ from vgs.experiments.train import TrainState, save_checkpoint
 from vgs.grasping.agent import DeltaQMonitor, GraspAgent
 from vgs.grasping.replay import ReplayBuffer
 from vgs.rollout import episodepool
+from vgs.rollout.policies import load_policy, policy_digest
 
 from . import eval_policies, fakes
 
@@ -213,6 +214,13 @@ def test_a_run_that_trained_on_is_another_policy(cfg, tmp_path: Path) -> None:
     save_agent(run / "checkpoint.pt", agent, cfg, episode=9)
     with pytest.raises(ConfigError, match="policy_trained_episodes"):
         evaluate(cfg, spec, out, progress=False)
+    # folders whose digest was written with batch norm's counters (before 2026-12-07) resume
+    legacy = policy_digest(str(run), load_policy(str(run), cfg), legacy=True)
+    assert legacy != meta["policy_digest"]
+    (out / "meta.json").write_text(json.dumps({**meta, "policy_digest": legacy,
+                                               "policy_trained_episodes": 9}))
+    evaluate(cfg, spec, out, progress=False)
+    assert json.loads((out / "meta.json").read_text())["policy_digest"] == meta["policy_digest"]
     # folders written before the count was recorded resume as before
     del meta["policy_trained_episodes"]
     (out / "meta.json").write_text(json.dumps(meta))

@@ -120,6 +120,9 @@ def _prepare(cfg: ExperimentConfig, spec: EvalSpec, out: Path,
                 else "policy_source"]
         if "policy_trained_episodes" in old:  # (not recorded before 2026-11-22)
             keys.append("policy_trained_episodes")
+        if (old.get("policy_digest") != meta["policy_digest"]
+                and old.get("policy_digest") == policy_digest(spec.policy, policy, legacy=True)):
+            old["policy_digest"] = meta["policy_digest"]  # the same weights, digested as before
         for key in keys:
             if json.dumps(old.get(key)) != json.dumps(meta[key]):
                 raise RunMismatchError(key, f"{out} holds another evaluation ({old.get(key)!r}, "

@@ -336,11 +336,18 @@ def load_policy(spec: str, cfg: ExperimentConfig, device: str = "cpu") -> EvalPo
                                 "run or policy folder (with run.json) nor module:function")
 
 
-def policy_digest(spec: str, policy: EvalPolicy) -> str:
+def policy_digest(spec: str, policy: EvalPolicy, legacy: bool = False) -> str:
     """What identifies a policy in an evaluation's ``meta.json``: for a training run or policy
-    folder the SHA-256 of its evaluation network's weights (every tensor's name, type, shape
-    and bytes) with its mode, so that another network under the same path text is another
-    policy; for ``center`` and ``random`` their name; for ``module:function`` the spec.
+    folder the SHA-256 of the weights its evaluation network acts with (every tensor's name,
+    type, shape and bytes, in name order) with its mode, so that another network under the
+    same path text is another policy; for ``center`` and ``random`` their name; for
+    ``module:function`` the spec.
+
+    Batch norm's ``num_batches_tracked`` counters are left out: they count training steps and
+    take no part in acting (running statistics are used), and ``vgs export-policy`` does not
+    keep them, so a training run and its exported final network (how ``scripts/carry.sh``
+    moves a finished run) are the same policy. ``legacy=True`` gives the digest written before
+    2026-12-07, with the counters, which :mod:`vgs.experiments.evaluate` still accepts.
     """
     agent = getattr(policy, "agent", None)
     if agent is None:
@@ -351,6 +358,8 @@ def policy_digest(spec: str, policy: EvalPolicy) -> str:
 
     h = hashlib.sha256(f"{getattr(policy, 'label', '')}\n".encode())
     for name, tensor in sorted(agent.eva_net.state_dict().items()):
+        if not legacy and name.endswith("num_batches_tracked"):
+            continue
         t = tensor.detach().cpu().contiguous()
         h.update(f"{name} {t.dtype} {tuple(t.shape)}\n".encode())
         h.update(t.flatten().view(torch.uint8).numpy().tobytes())
