@@ -6,7 +6,7 @@
 # started again, also after the folder was moved to another machine (docs/training.md, "Runs
 # that move between machines"). A run that cannot finish on this machine moves through git:
 # stop it, `scripts/carry.sh pack runs/paper_light_s<SEED> docs/results/unfinished/
-# paper_light_s<SEED>.tar.xz`, commit that file; on the next machine this script unpacks it
+# paper_light_s<SEED>.tar.xz`, commit that file (or its .partNN pieces); on the next machine this script unpacks it
 # and goes on, and deletes it once the run is published (commit the deletion).
 # The paper's position action is the profile's default; ACTION=rotation runs the rotation action
 # space of visual-pushing-grasping, into runs/paper_light_rotation_s<SEED>.
@@ -41,7 +41,7 @@ case "$PEG" in
 esac
 OUT=runs/$NAME
 CARRY=docs/results/unfinished/$NAME.tar.xz
-if [ ! -e "$OUT" ] && [ -f "$CARRY" ]; then
+if [ ! -e "$OUT" ] && { [ -f "$CARRY" ] || [ -f "$CARRY.part00" ]; }; then
     scripts/carry.sh unpack "$CARRY" "$OUT"
 fi
 # The baseline alone first: it is short, and a finished run needs no checkpoint to move.
@@ -49,4 +49,4 @@ $VGS train --mode baseline "${SET[@]}" --seed "$SEED" --out "$OUT/train/baseline
     --no-progress
 $VGS reproduce "${SET[@]}" --out "$OUT" --no-progress
 $VGS report "$OUT" --title "$TITLE" --publish "docs/results/$NAME"
-rm -f "$CARRY"
+rm -f "$CARRY" "$CARRY".part[0-9][0-9]

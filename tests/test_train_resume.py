@@ -208,9 +208,19 @@ def test_a_run_carried_through_git_resumes_and_its_finished_runs_stay_done(
     script = Path(__file__).resolve().parents[1] / "scripts" / "carry.sh"
     env = {"PATH": "/usr/bin:/bin", "VGS": str(Path(sys.executable).parent / "vgs")}
     packed, moved = tmp_path / "carry.tar.xz", tmp_path / "elsewhere" / "repro"
-    for args in (["pack", run, packed], ["unpack", packed, moved]):
-        subprocess.run(["bash", str(script), *map(str, args)], check=True, env=env,
-                       capture_output=True)
+    subprocess.run(["bash", str(script), "pack", str(run), str(packed)], check=True,
+                   env={**env, "CARRY_PART_BYTES": "100000000"}, capture_output=True)
+    size = packed.stat().st_size
+    # over the part size (the repository takes no file over 5 MB) it goes in pieces, and the
+    # pieces unpack as the whole file would
+    subprocess.run(["bash", str(script), "pack", str(run), str(packed)], check=True,
+                   env={**env, "CARRY_PART_BYTES": str(size // 2)}, capture_output=True)
+    parts = sorted(tmp_path.glob("carry.tar.xz.part*"))  # (a pack's bytes vary by mtimes)
+    assert not packed.exists() and len(parts) >= 2
+    assert [p.name[-2:] for p in parts] == [f"{i:02d}" for i in range(len(parts))]
+    assert max(p.stat().st_size for p in parts) <= size // 2
+    subprocess.run(["bash", str(script), "unpack", str(packed), str(moved)], check=True,
+                   env=env, capture_output=True)
 
     done, cut = moved / "train" / "done", moved / "train" / "cut"
     assert not (done / "checkpoint.pt").exists() and (done / "policy.pt").exists()
