@@ -7,7 +7,7 @@
 #
 # A packed state over CARRY_PART_BYTES (4,500,000 bytes: the repository takes no file over
 # 5 MB) is written as FILE.part00, FILE.part01, ... in its stead, which unpack joins again (a
-# finished paper-light seed: two final networks and six evaluation journals, about 6 MB).
+# finished paper-light seed: two final networks, six evaluation journals, its report: 7.3 MB).
 #
 # pack keeps every file of RUN but TensorBoard logs, locks and temporary files, and for each
 # training run folder in it (one holding checkpoint.pt): a finished run (convergence.json

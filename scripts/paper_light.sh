@@ -6,8 +6,9 @@
 # started again, also after the folder was moved to another machine (docs/training.md, "Runs
 # that move between machines"). A run that cannot finish on this machine moves through git:
 # stop it, `scripts/carry.sh pack runs/paper_light_s<SEED> docs/results/unfinished/
-# paper_light_s<SEED>.tar.xz`, commit that file (or its .partNN pieces); on the next machine this script unpacks it
-# and goes on, and deletes it once the run is published (commit the deletion).
+# paper_light_s<SEED>.tar.xz`, commit that file (or its pieces, .part00 ...); on the next
+# machine this script unpacks it and goes on, and deletes it once the run is published (commit
+# the deletion).
 # The paper's position action is the profile's default; ACTION=rotation runs the rotation action
 # space of visual-pushing-grasping, into runs/paper_light_rotation_s<SEED>.
 # PEG=com runs the protocol on pegs whose centre of mass lies 20 mm from the middle, the heavy
