@@ -52,7 +52,7 @@ pack)
     else
         split -b "$PART" -d -a 2 "$FILE.tmp" "$FILE.part"
         rm "$FILE.tmp"
-        echo "carry: $FILE.part00 to $(basename "$(ls "$FILE".part[0-9][0-9] | tail -1)")" \
+        echo "carry: $FILE in $(ls "$FILE".part[0-9][0-9] | wc -l) pieces, $FILE.part00 ..." \
              "($(cat "$FILE".part[0-9][0-9] | wc -c) bytes); commit them, and unpack $FILE on" \
              "the next machine"
     fi

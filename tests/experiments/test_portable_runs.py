@@ -180,8 +180,8 @@ def test_a_policy_folder_evaluates_like_its_training_run(
         "policy_trained_episodes"] == 6
     # an evaluation begun on the training run resumes on its exported network (scripts/carry.sh
     # moves a finished run as policy.pt): the same weights are the same policy
-    assert vgs(capsys, *evaluate[:2], "6", *evaluate[3:], "--policy", str(clone), "--out",
-               str(tmp_path / "e_run"))[0] == 0
+    assert vgs(capsys, *evaluate, "--episodes", "6", "--policy", str(clone), "--out",
+               str(tmp_path / "e_run"))[0] == 0  # (the last --episodes counts)
     c = pd.read_parquet(tmp_path / "e_run" / "episodes.parquet").drop(columns="wall_s")
     pd.testing.assert_frame_equal(c.iloc[:4], a)
     assert len(c) == 6
