@@ -103,3 +103,29 @@ def test_the_report_sets_each_learned_policy_against_the_references(tmp_path: Pa
     rows = [line for line in section.splitlines() if line.startswith("| ")][1:]
     assert rows and all("| center |" in row for row in rows)
     assert {row.split("|")[3].strip().split()[0] for row in rows} == {"baseline", "vgs"}
+
+
+def test_the_report_reads_a_condition_the_paper_did_not_test(tmp_path: Path) -> None:
+    """A run tested on `com` alone (issue 55's protocol): the paper gives no gain for it, so
+    its column reads "-" and the verdict says so, where a KeyError stopped the report."""
+    from vgs.analysis.report import build_report
+
+    folder = tmp_path / "report"
+    for policy in ("baseline", "vgs", "center"):
+        src = Path(__file__).parent / "data" / "report_small" / "eval" / policy / "nominal"
+        df = pd.read_parquet(src / "episodes.parquet")
+        df["condition"] = "com"
+        (folder / "eval" / policy / "com").mkdir(parents=True)
+        df.to_parquet(folder / "eval" / policy / "com" / "episodes.parquet")
+    text = build_report(folder).read_text()
+    head = text.split("## Headline")[1].split("\n## ")[0]
+    (row,) = [line for line in head.splitlines() if line.startswith("| com |")]
+    assert row.split("|")[6].strip() == "-"
+    # Its verdict, with enough successes to compare (the small table has too few).
+    from vgs.analysis.report import _verdict
+    from vgs.analysis.stats import Gain
+
+    stats = {"success_rate": 0.9, "successes": 900, "episodes": 1000, "time_std_s": 5.0}
+    verdict = _verdict("com", Gain(10.0, 8.0, 12.0, True, 900), stats, stats,
+                       Gain(20.0, 17.0, 23.0, True, 1000))
+    assert "+20.00 % [+17.00, +23.00] (a condition the paper did not test)" in verdict

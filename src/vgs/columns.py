@@ -174,8 +174,9 @@ SUMMARY_COLUMNS: dict[str, Column] = {
        for stat in ("mean", "std", "min", "max", "median")},
     "time_per_assembled_s": Column("s", "float", "assembly time of all attempts, failed ones "
                                                  "included, per assembled peg"),
-    "abs_grasp_offset_mean_mm": Column("mm", "float", "mean |grasp offset| from the centre of "
-                                                      "mass"),
+    "abs_grasp_offset_mean_mm": Column("mm", "float", "mean distance of the grasp from the "
+                                                      "peg's middle (its centre of mass on a "
+                                                      "uniform peg)"),
     **{name: col for prefix, what in _GAINS for name, col in (
         (f"{prefix}_pct", Column("%", "float", what)),
         (f"{prefix}_ci_low", Column("%", "float", f"lower end of the 95 % interval of "
@@ -201,7 +202,8 @@ SUMMARY_COLUMNS: dict[str, Column] = {
        for name, col in (
            ("successes", Column("", "int", "successful assemblies")),
            ("grasp_success", Column("", "float", f"{_RATE} with a held grasp")),
-           ("offset_mm", Column("mm", "float", "mean |grasp offset| from the centre of mass")),
+           ("offset_mm", Column("mm", "float", "mean distance of the grasp from the peg's "
+                                                "middle")),
            ("time_mean_s", Column("s", "float", "mean assembly time of the successes")),
            ("time_std_s", Column("s", "float", "standard deviation of the successes' assembly "
                                                "times")),
