@@ -115,12 +115,25 @@ def test_the_report_reads_a_condition_the_paper_did_not_test(tmp_path: Path) -> 
         src = Path(__file__).parent / "data" / "report_small" / "eval" / policy / "nominal"
         df = pd.read_parquet(src / "episodes.parquet")
         df["condition"] = "com"
+        df["peg_com_shift_mm"] = 20.0
+        df["grasp_offset_com_mm"] = df["grasp_offset_mm"] - 20.0
         (folder / "eval" / policy / "com").mkdir(parents=True)
         df.to_parquet(folder / "eval" / policy / "com" / "episodes.parquet")
     text = build_report(folder).read_text()
     head = text.split("## Headline")[1].split("\n## ")[0]
     (row,) = [line for line in head.splitlines() if line.startswith("| com |")]
     assert row.split("|")[6].strip() == "-"
+    # The distance of the grasps from the true centre of mass beside that from the middle.
+    section = text.split("\n## Centre of mass 20 mm")[1].split("\n## ")[0]
+    (middle,) = [line for line in section.splitlines() if "from the middle [mm]" in line]
+    (com,) = [line for line in section.splitlines() if "from the centre of mass [mm]" in line]
+    eval_dir = Path(__file__).parent / "data" / "report_small" / "eval"
+    offsets = pd.read_parquet(eval_dir / "center" / "nominal" / "episodes.parquet")[
+        "grasp_offset_mm"].dropna()
+    (header,) = [line for line in section.splitlines() if line.startswith("| metric |")]
+    at = [c.strip() for c in header.split("|")].index("center (ours)")
+    assert middle.split("|")[at].strip() == f"{offsets.abs().mean():.1f}" == "0.5"
+    assert com.split("|")[at].strip() == f"{(offsets - 20.0).abs().mean():.1f}" == "20.2"
     # Its verdict, with enough successes to compare (the small table has too few).
     from vgs.analysis.report import _verdict
     from vgs.analysis.stats import Gain
