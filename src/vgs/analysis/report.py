@@ -46,6 +46,7 @@ from vgs.analysis.stats import (  # noqa: E402
     SUCCESS_TOTAL_GAIN,
     TOTAL_GAIN,
     Gain,
+    com_shifted,
     efficiency_gain,
     summarize,
 )
@@ -504,8 +505,7 @@ def _com_offset_rows(df: pd.DataFrame, policies: list[str]) -> list[list[str]]:
     """A condition whose pegs' centre of mass is off the middle (``com``): the mean |grasp
     offset| from the true centre of mass per policy (ground truth, analysis only); none on
     uniform pegs, where it equals the offset from the middle."""
-    if "grasp_offset_com_mm" not in df or "peg_com_shift_mm" not in df \
-            or not (df["peg_com_shift_mm"].fillna(0.0) != 0.0).any():
+    if not com_shifted(df):
         return []
     cells = []
     for policy in policies:

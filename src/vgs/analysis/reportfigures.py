@@ -13,6 +13,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from vgs.analysis.palette import policy_color  # noqa: E402
+from vgs.analysis.stats import com_shifted  # noqa: E402
 from vgs.config import CONDITIONS  # noqa: E402
 
 LEARNED = ("baseline", "vgs")
@@ -71,9 +72,7 @@ def plot_grasp_positions(df: pd.DataFrame, path: Path) -> Path:
     middle, from the centre of mass (bottom row). Positive offsets point to the heavy end
     (body +z); ground truth (``grasp_offset_mm``, ``grasp_offset_com_mm``)."""
     conditions = [c for c in CONDITIONS if c in set(df["condition"])]
-    shifted = {c for c in conditions if "peg_com_shift_mm" in df
-               and "grasp_offset_com_mm" in df
-               and (df.loc[df["condition"] == c, "peg_com_shift_mm"].fillna(0) > 0).any()}
+    shifted = {c for c in conditions if com_shifted(df[df["condition"] == c])}
     rows = [("grasp_offset_mm", "from the middle")]
     if shifted:
         rows.append(("grasp_offset_com_mm", "from the centre of mass"))

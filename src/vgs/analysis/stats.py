@@ -243,6 +243,14 @@ ACROSS_SITES = ("within 5 mm of the axis", "5 mm or more beside it")
 NO_GRASP = "no grasp"
 
 
+def com_shifted(df: pd.DataFrame) -> bool:
+    """Whether some of an evaluation table's pegs have their centre of mass off the middle
+    (the `com` conditions), so that the grasp's distance from the centre of mass
+    (``grasp_offset_com_mm``, ground truth) differs from that from the middle."""
+    return "peg_com_shift_mm" in df and "grasp_offset_com_mm" in df \
+        and bool((df["peg_com_shift_mm"].fillna(0.0) != 0.0).any())
+
+
 def phase_columns(df: pd.DataFrame) -> list[str]:
     """The ``time_<phase>_s`` columns of a table, in the table's (the phases') order."""
     return [c for c in df.columns if c.startswith(PHASE_PREFIX) and c.endswith(PHASE_SUFFIX)
